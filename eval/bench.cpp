@@ -1,0 +1,194 @@
+#include "eval/bench.hpp"
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range2d.h>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include "eval/io.hpp"
+#include "perception/sensor_geometry.hpp"
+#include "sim/erim_scanner.hpp"
+#include "sim/ray_scene.hpp"
+#include "sim/world.hpp"
+#include "terrains/terrain.hpp"
+
+namespace ambler::eval {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// Median seconds of `reps` runs of `f` (after one warm-up run).
+double timeMedian(int reps, const std::function<void()>& f) {
+  f();
+  std::vector<double> s;
+  for (int i = 0; i < reps; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    f();
+    s.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return median(s);
+}
+
+// The benchmark world: the default `mars` terrain (fractal, craters, rocks), seed 1.
+struct BenchWorld {
+  fs::path dir;
+  sim::World world;
+  ~BenchWorld() {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+};
+
+std::unique_ptr<BenchWorld> makeBenchWorld() {
+  terrains::TerrainSpec spec;
+  spec.kind = terrains::TerrainKind::Mars;
+  const terrains::Terrain terrain = terrains::makeTerrain(spec, 1);
+  const fs::path dir = fs::temp_directory_path() / ("ambler-bench-" + std::to_string(::getpid()));
+  const fs::path xml = sim::writeWorld(terrain, dir, "bench");
+  return std::unique_ptr<BenchWorld>(new BenchWorld{dir, sim::World::load(xml)});
+}
+
+// The scan's rays in 4×4 tiles, as the emulator casts them, into bare Embree packets; only the
+// hit distance is kept. This is the reference the emulator is compared with.
+void bareEmbreeCast(RTCScene scene, const perception::RangeImage& img, const Eigen::Isometry3d& T,
+                    std::vector<float>& t_out) {
+  const int rows = img.rows(), cols = img.cols();
+  std::vector<double> sp(rows), cp(rows), st(cols), ct(cols);
+  for (int r = 0; r < rows; ++r) sp[r] = std::sin(img.phi[r]), cp[r] = std::cos(img.phi[r]);
+  for (int c = 0; c < cols; ++c) st[c] = std::sin(img.theta[c]), ct[c] = std::cos(img.theta[c]);
+  const Eigen::Matrix3d R = T.linear();
+  const Eigen::Vector3d o = T.translation();
+  t_out.resize(std::size_t(rows) * cols);
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, (rows + 3) / 4, 0, (cols + 3) / 4), [&](const auto& range) {
+    RTCRayHit16 rh;
+    alignas(64) int valid[16];
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (int tr = range.rows().begin(); tr != range.rows().end(); ++tr)
+      for (int tc = range.cols().begin(); tc != range.cols().end(); ++tc) {
+        for (int i = 0; i < 16; ++i) {
+          const int r = std::min(tr * 4 + i / 4, rows - 1), c = std::min(tc * 4 + i % 4, cols - 1);
+          valid[i] = (tr * 4 + i / 4 < rows && tc * 4 + i % 4 < cols) ? -1 : 0;
+          const Eigen::Vector3d d = R * Eigen::Vector3d(st[c], cp[r] * ct[c], sp[r] * ct[c]);
+          rh.ray.org_x[i] = float(o.x()), rh.ray.org_y[i] = float(o.y()), rh.ray.org_z[i] = float(o.z());
+          rh.ray.dir_x[i] = float(d.x()), rh.ray.dir_y[i] = float(d.y()), rh.ray.dir_z[i] = float(d.z());
+          rh.ray.tnear[i] = 0.0f;
+          rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+          rh.ray.mask[i] = 0xFFFFFFFFu;
+          rh.ray.time[i] = 0.0f;
+          rh.ray.flags[i] = 0;
+          rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, scene, &ctx, &rh);
+        for (int i = 0; i < 16; ++i)
+          if (valid[i]) t_out[std::size_t(tr * 4 + i / 4) * cols + tc * 4 + i % 4] = rh.ray.tfar[i];
+      }
+  });
+}
+
+}  // namespace
+
+nlohmann::ordered_json benchScan(const BenchOptions& opt) {
+  std::fprintf(stderr, "bench scan: building the benchmark world (mars terrain, seed 1)...\n");
+  const auto bw = makeBenchWorld();
+  const sim::RayScene scene(bw->world);
+  const Eigen::Isometry3d T = perception::sensorPose({0, -6, 3}, {0, -30.0 * std::numbers::pi / 180, 0});
+  const int reps = opt.repetitions;
+
+  // 1. 64×256, one thread: the emulator (ERIM defaults, one ray per pixel) vs a plain mj_ray loop.
+  sim::ErimConfig small;
+  small.mixed_pixels = false;
+  const sim::ErimScanner scanner_small(scene, small);
+  double emu_s = 0, emu_mixed_s = 0, mj_s = 0;
+  long mj_rays = 0;
+  {
+    tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    emu_s = timeMedian(reps, [&] { scanner_small.scan(T, 1); });
+    sim::ErimConfig mixed = small;
+    mixed.mixed_pixels = true;
+    const sim::ErimScanner scanner_mixed(scene, mixed);
+    emu_mixed_s = timeMedian(reps, [&] { scanner_mixed.scan(T, 1); });
+    // mj_ray walks every cell of the hfield the ray's bounding box covers, so a full 64×256 loop
+    // takes long: time every `stride`-th pixel of the same scan (the same mix of rays).
+    const auto img = perception::RangeImage::blank(small.rows, small.cols, small.fov_v_rad, small.fov_h_rad);
+    const int stride = 8;
+    mj_s = timeMedian(std::max(1, reps / 2), [&] {
+      mj_rays = 0;
+      for (int p = 0; p < small.rows * small.cols; p += stride, ++mj_rays) {
+        const int r = p / small.cols, c = p % small.cols;
+        bw->world.ray(T.translation(), T.linear() * perception::beamDirection(img.phi[r], img.theta[c]));
+      }
+    });
+  }
+  const double rays_small = double(small.rows) * small.cols;
+  const double emu_mrays = rays_small / emu_s / 1e6, mj_mrays = mj_rays / mj_s / 1e6;
+
+  // 2. 1024×4096, all cores: the emulator vs a bare Embree packet cast of the same rays.
+  sim::ErimConfig large = small;
+  large.rows = 1024;
+  large.cols = 4096;
+  const sim::ErimScanner scanner_large(scene, large);
+  const auto img_large = perception::RangeImage::blank(large.rows, large.cols, large.fov_v_rad, large.fov_h_rad);
+  std::vector<float> t_bare;
+  std::vector<double> emu_large_s, bare_s;
+  // Interleave the two so machine noise hits both alike.
+  for (int i = 0; i <= reps; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const sim::Scan s = scanner_large.scan(T, 1);
+    const auto t1 = std::chrono::steady_clock::now();
+    bareEmbreeCast(scene.embreeScene(), img_large, T, t_bare);
+    const auto t2 = std::chrono::steady_clock::now();
+    if (i == 0) continue;  // warm-up
+    emu_large_s.push_back(std::chrono::duration<double>(t1 - t0).count());
+    bare_s.push_back(std::chrono::duration<double>(t2 - t1).count());
+  }
+  const double rays_large = double(large.rows) * large.cols;
+  const double large_mrays = rays_large / median(emu_large_s) / 1e6;
+  const double bare_mrays = rays_large / median(bare_s) / 1e6;
+
+  nlohmann::ordered_json j;
+  j["emulator_mrays_s"] = emu_mrays;
+  j["mj_ray_mrays_s"] = mj_mrays;
+  j["speedup_vs_mj_ray"] = emu_mrays / mj_mrays;
+  j["large_emulator_mrays_s"] = large_mrays;
+  j["bare_embree_mrays_s"] = bare_mrays;
+  j["ratio_vs_bare_embree"] = large_mrays / bare_mrays;
+  j["emulator_mixed_pixels_mpixels_s"] = rays_small / emu_mixed_s / 1e6;
+  j["threads"] = tbb::info::default_concurrency();
+  j["repetitions"] = reps;
+  j["mj_ray_rays_timed"] = mj_rays;
+
+  std::printf("ambler bench scan (medians of %d; %d threads for the large scan)\n", reps,
+              tbb::info::default_concurrency());
+  std::printf("  %-46s %10s\n", "measurement", "Mrays/s");
+  std::printf("  %-46s %10.3f\n", "emulator 64x256, 1 thread", emu_mrays);
+  std::printf("  %-46s %10.4f\n", "mj_ray loop 64x256, 1 thread", mj_mrays);
+  std::printf("  %-46s %10.1fx\n", "  speedup vs mj_ray", emu_mrays / mj_mrays);
+  std::printf("  %-46s %10.3f\n", "emulator 64x256, 1 thread, mixed pixels (px/s)", rays_small / emu_mixed_s / 1e6);
+  std::printf("  %-46s %10.3f\n", "emulator 1024x4096, all cores", large_mrays);
+  std::printf("  %-46s %10.3f\n", "bare Embree rtcIntersect16, all cores", bare_mrays);
+  std::printf("  %-46s %10.3f\n", "  ratio emulator / bare Embree", large_mrays / bare_mrays);
+  if (!opt.json.empty()) writeJson(opt.json, j);
+  return j;
+}
+
+}  // namespace ambler::eval

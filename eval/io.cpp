@@ -1,0 +1,64 @@
+#include "eval/io.hpp"
+
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <cstdint>
+#include <cstring>
+#include <stdexcept>
+
+#include "sim/atomic_file.hpp"
+
+namespace ambler::eval {
+
+namespace {
+
+std::string encode(const std::filesystem::path& path, const char* ext, const cv::Mat& image,
+                   const std::vector<int>& params = {}) {
+  std::vector<uchar> buf;
+  if (!cv::imencode(ext, image, buf, params))
+    throw std::runtime_error(path.string() + ": could not encode image");
+  return std::string(buf.begin(), buf.end());
+}
+
+}  // namespace
+
+void writeText(const std::filesystem::path& path, const std::string& text) {
+  sim::writeFileAtomic(path, text);
+}
+
+void writeJson(const std::filesystem::path& path, const nlohmann::ordered_json& json) {
+  sim::writeFileAtomic(path, json.dump(2) + "\n");
+}
+
+void writeTiff(const std::filesystem::path& path, const FloatRaster& raster) {
+  const cv::Mat m(int(raster.rows()), int(raster.cols()), CV_32FC1,
+                  const_cast<float*>(raster.data()));
+  sim::writeFileAtomic(path, encode(path, ".tiff", m));
+}
+
+void writePng(const std::filesystem::path& path, const cv::Mat& image) {
+  sim::writeFileAtomic(path, encode(path, ".png", image));
+}
+
+void writePly(const std::filesystem::path& path, const std::vector<Eigen::Vector3f>& points) {
+  std::string bytes = "ply\nformat binary_little_endian 1.0\ncomment ambler returns, world frame, metres\n"
+                      "element vertex " + std::to_string(points.size()) +
+                      "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  const std::size_t head = bytes.size();
+  bytes.resize(head + points.size() * 12);
+  for (std::size_t i = 0; i < points.size(); ++i) std::memcpy(&bytes[head + 12 * i], points[i].data(), 12);
+  sim::writeFileAtomic(path, bytes);
+}
+
+FloatRaster readTiff(const std::filesystem::path& path) {
+  const cv::Mat m = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
+  if (m.empty()) throw std::runtime_error(path.string() + ": cannot read TIFF");
+  if (m.type() != CV_32FC1) throw std::runtime_error(path.string() + ": not a float32 single-channel TIFF");
+  FloatRaster out(m.rows, m.cols);
+  for (int r = 0; r < m.rows; ++r)
+    for (int c = 0; c < m.cols; ++c) out(r, c) = m.at<float>(r, c);
+  return out;
+}
+
+}  // namespace ambler::eval

@@ -1,0 +1,28 @@
+#pragma once
+// Run-directory files: every write goes to a temporary file renamed into place, so a file is
+// either whole or absent.
+#include <Eigen/Core>
+#include <filesystem>
+#include <nlohmann/json_fwd.hpp>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+namespace ambler::eval {
+
+using FloatRaster = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+void writeText(const std::filesystem::path& path, const std::string& text);
+// Pretty-printed with a trailing newline; key order as inserted.
+void writeJson(const std::filesystem::path& path, const nlohmann::ordered_json& json);
+// Single-channel float32 TIFF (NaN kept as NaN).
+void writeTiff(const std::filesystem::path& path, const FloatRaster& raster);
+// PNG of an 8-bit image (grey or BGR).
+void writePng(const std::filesystem::path& path, const cv::Mat& image);
+// Binary little-endian PLY of points (float x, y, z).
+void writePly(const std::filesystem::path& path, const std::vector<Eigen::Vector3f>& points);
+
+// Reads a float32 TIFF back (for tests and tools). Throws std::runtime_error naming the file.
+FloatRaster readTiff(const std::filesystem::path& path);
+
+}  // namespace ambler::eval

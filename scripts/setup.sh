@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Installs every build and run dependency of ambler from Debian 12's archive.
+# Idempotent: does nothing (and needs no network) when everything is already there.
+set -euo pipefail
+packages=(
+  build-essential cmake ninja-build pkg-config
+  libmujoco-dev libqhull-dev        # MuJoCo 2.2.2; its CMake config names libqhull_r
+  libembree-dev libtbb-dev          # ray casting, parallel loops
+  libeigen3-dev libopencv-dev       # maths, images
+  libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if ((${#missing[@]})); then
+  echo "setup: installing ${missing[*]}"
+  sudo_cmd=""
+  [[ $(id -u) -ne 0 ]] && sudo_cmd="sudo"
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+  echo "setup: all dependencies present"
+fi

@@ -1,0 +1,183 @@
+#include "sim/erim_scanner.hpp"
+
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+#include "perception/sensor_geometry.hpp"
+#include "sim/ray_scene.hpp"
+#include "terrains/random.hpp"
+
+namespace ambler::sim {
+
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// Footprint cubature (unit disk): offsets and weights.
+struct Footprint {
+  std::array<double, kFootprintSamples> du{}, dv{}, w{};
+};
+
+Footprint footprint() {
+  Footprint f;
+  f.w[0] = 0.25;
+  const double r = std::sqrt(2.0 / 3.0);
+  for (int k = 1; k < kFootprintSamples; ++k) {
+    const double a = (k - 1) * std::numbers::pi / 3.0;
+    f.du[k] = r * std::cos(a);
+    f.dv[k] = r * std::sin(a);
+    f.w[k] = 0.125;
+  }
+  return f;
+}
+
+void requireConfig(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument("ErimConfig: " + what);
+}
+
+// Precomputed sin/cos of the scan angles of one footprint sample.
+struct AngleTable {
+  std::vector<double> sin_phi, cos_phi, sin_theta, cos_theta;
+};
+
+AngleTable angleTable(const perception::RangeImage& img, double dphi, double dtheta) {
+  AngleTable t;
+  for (double phi : img.phi) {
+    t.sin_phi.push_back(std::sin(phi + dphi));
+    t.cos_phi.push_back(std::cos(phi + dphi));
+  }
+  for (double theta : img.theta) {
+    t.sin_theta.push_back(std::sin(theta + dtheta));
+    t.cos_theta.push_back(std::cos(theta + dtheta));
+  }
+  return t;
+}
+
+}  // namespace
+
+double measureRange(double rho, double normal, const ErimConfig& cfg) {
+  double m = rho + cfg.noise_k * rho * rho * normal;
+  if (m < 0.0) m = 0.0;
+  if (cfg.ambiguity_m > 0.0) m = std::fmod(m, cfg.ambiguity_m);
+  if (cfg.quantization_m > 0.0) {
+    m = cfg.quantization_m * std::nearbyint(m / cfg.quantization_m);
+    // The top count rounds onto the interval's end, which is range 0 again.
+    if (cfg.ambiguity_m > 0.0 && m >= cfg.ambiguity_m) m = 0.0;
+  }
+  return m;
+}
+
+ErimScanner::ErimScanner(const RayScene& scene, ErimConfig config)
+    : scene_(scene), config_(config) {
+  requireConfig(config.rows >= 1 && config.cols >= 1, "rows and cols must be positive");
+  requireConfig(config.fov_v_rad > 0 && config.fov_v_rad < std::numbers::pi, "fov_v out of (0, pi)");
+  requireConfig(config.fov_h_rad > 0 && config.fov_h_rad < std::numbers::pi, "fov_h out of (0, pi)");
+  requireConfig(config.noise_k >= 0 && config.quantization_m >= 0 && config.ambiguity_m >= 0,
+                "noise_k, quantization_m and ambiguity_m must be non-negative");
+  requireConfig(config.max_range_m > 0, "max_range_m must be positive");
+  requireConfig(config.beam_divergence_rad >= 0, "beam_divergence_rad must be non-negative");
+  requireConfig(config.dropout >= 0 && config.dropout < 1, "dropout must be in [0, 1)");
+}
+
+double ErimScanner::beamDivergence() const {
+  if (config_.beam_divergence_rad > 0) return config_.beam_divergence_rad;
+  return std::max(config_.fov_v_rad / config_.rows, config_.fov_h_rad / config_.cols);
+}
+
+Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const {
+  const int rows = config_.rows, cols = config_.cols;
+  Scan out;
+  out.image = perception::RangeImage::blank(rows, cols, config_.fov_v_rad, config_.fov_h_rad);
+  out.image.T_WS = T_WS;
+  out.true_range = perception::RangeMatrix::Constant(rows, cols, kNaN);
+  out.true_hit.setConstant(std::size_t(rows) * cols, 3, kNaN);
+  out.geom.setConstant(rows, cols, -1);
+
+  const Footprint fp = footprint();
+  const int samples = config_.mixed_pixels ? kFootprintSamples : 1;
+  const double radius = 0.5 * beamDivergence();
+  std::vector<AngleTable> tables;
+  for (int k = 0; k < samples; ++k)
+    tables.push_back(angleTable(out.image, radius * fp.dv[k], radius * fp.du[k]));
+
+  const Eigen::Matrix3d R = T_WS.linear();
+  const Eigen::Vector3d o = T_WS.translation();
+  const int tile_rows = (rows + 3) / 4, tile_cols = (cols + 3) / 4;
+
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, tile_rows, 0, tile_cols), [&](const auto& range) {
+    RayPacket16 rays;
+    std::array<HitPacket16, kFootprintSamples> hits;
+    for (int i = 0; i < 16; ++i) {
+      rays.ox[i] = float(o.x());
+      rays.oy[i] = float(o.y());
+      rays.oz[i] = float(o.z());
+      rays.tnear[i] = 0.0f;
+    }
+    for (int tr = range.rows().begin(); tr != range.rows().end(); ++tr)
+      for (int tc = range.cols().begin(); tc != range.cols().end(); ++tc) {
+        for (int k = 0; k < samples; ++k) {
+          const AngleTable& a = tables[k];
+          for (int i = 0; i < 16; ++i) {
+            const int r = std::min(tr * 4 + i / 4, rows - 1), c = std::min(tc * 4 + i % 4, cols - 1);
+            rays.valid[i] = (tr * 4 + i / 4 < rows && tc * 4 + i % 4 < cols) ? -1 : 0;
+            const double ct = a.cos_theta[c];
+            const Eigen::Vector3d d =
+                R * Eigen::Vector3d(a.sin_theta[c], a.cos_phi[r] * ct, a.sin_phi[r] * ct);
+            rays.dx[i] = float(d.x());
+            rays.dy[i] = float(d.y());
+            rays.dz[i] = float(d.z());
+            rays.tfar[i] = kInf;
+          }
+          scene_.intersect16(rays, hits[k]);
+        }
+        for (int i = 0; i < 16; ++i) {
+          if (!rays.valid[i]) continue;
+          const int r = tr * 4 + i / 4, c = tc * 4 + i % 4;
+          const std::size_t pixel = std::size_t(r) * cols + c;
+          const float t0 = hits[0].t[i];
+          if (t0 < kInf) {
+            out.true_range(r, c) = t0;
+            out.geom(r, c) = hits[0].geom[i];
+            const double ct = tables[0].cos_theta[c];
+            const Eigen::Vector3d dir =
+                R * Eigen::Vector3d(tables[0].sin_theta[c], tables[0].cos_phi[r] * ct,
+                                    tables[0].sin_phi[r] * ct);
+            out.true_hit.row(pixel) = (o + double(t0) * dir).cast<float>().transpose();
+          }
+          // The reported range: the power-weighted mean over the footprint (returned power of an
+          // extended target falls as 1/ρ²). Fewer than half the footprint returning: no return.
+          double rho = std::numeric_limits<double>::quiet_NaN();
+          if (samples == 1) {
+            if (t0 < kInf) rho = t0;
+          } else {
+            double hit_w = 0, sum_w = 0, sum_wt = 0;
+            for (int k = 0; k < samples; ++k) {
+              const double t = hits[k].t[i];
+              if (!(t < kInf)) continue;
+              hit_w += fp.w[k];
+              sum_w += fp.w[k] / (t * t);
+              sum_wt += fp.w[k] / t;
+            }
+            if (hit_w >= 0.5) rho = sum_wt / sum_w;
+          }
+          if (!(rho <= config_.max_range_m)) continue;
+          const std::uint64_t key = terrains::streamKey(seed, pixel);
+          if (config_.dropout > 0 && terrains::toUnit(terrains::mix64(key ^ 0x5bd1e995ull)) < config_.dropout)
+            continue;
+          const double normal = config_.noise_k > 0 ? terrains::normalFromKey(key) : 0.0;
+          out.image.range(r, c) = float(measureRange(rho, normal, config_));
+        }
+      }
+  });
+  return out;
+}
+
+}  // namespace ambler::sim

@@ -1,0 +1,285 @@
+#include "sim/ray_scene.hpp"
+
+#include <embree3/rtcore.h>
+#include <mujoco/mujoco.h>
+#include <tbb/parallel_for.h>
+
+#include <cstring>
+#include <deque>
+#include <stdexcept>
+#include <string>
+
+#include "sim/embree_primitives.hpp"
+#include "sim/world.hpp"
+
+namespace ambler::sim {
+
+namespace {
+
+void onEmbreeError(void* user, RTCError code, const char* message) {
+  auto* sink = static_cast<std::string*>(user);
+  if (sink->empty()) *sink = "Embree error " + std::to_string(int(code)) + ": " + (message ? message : "");
+}
+
+Eigen::Matrix3d geomRotation(const mjData* d, int g) {
+  Eigen::Matrix3d R;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) R(i, j) = d->geom_xmat[9 * g + 3 * i + j];
+  return R;
+}
+
+Eigen::Vector3d geomPosition(const mjData* d, int g) {
+  return {d->geom_xpos[3 * g], d->geom_xpos[3 * g + 1], d->geom_xpos[3 * g + 2]};
+}
+
+// mj_ray skips geoms that are invisible (alpha 0 in their rgba or material); so does the scene.
+bool rayVisible(const mjModel* m, int g) {
+  const int mat = m->geom_matid[g];
+  return mat < 0 ? m->geom_rgba[4 * g + 3] != 0 : m->mat_rgba[4 * mat + 3] != 0;
+}
+
+struct MeshBuilder {
+  std::vector<float> vertices;        // x, y, z
+  std::vector<unsigned> triangles;    // i, j, k
+  unsigned add(const Eigen::Vector3d& p) {
+    vertices.insert(vertices.end(), {float(p.x()), float(p.y()), float(p.z())});
+    return unsigned(vertices.size() / 3 - 1);
+  }
+  void tri(unsigned a, unsigned b, unsigned c) { triangles.insert(triangles.end(), {a, b, c}); }
+};
+
+// MuJoCo's hfield as a closed solid: the top surface split along (r,c)–(r+1,c+1) exactly as
+// mj_rayHfield does, the four walls down to the base (mj_ray hits the box sides below the edge
+// profile and the base box), and the bottom.
+MeshBuilder hfieldMesh(const mjModel* m, const mjData* d, int g) {
+  const int h = m->geom_dataid[g];
+  const int nrow = m->hfield_nrow[h], ncol = m->hfield_ncol[h];
+  const mjtNum* size = m->hfield_size + 4 * h;
+  const float* data = m->hfield_data + m->hfield_adr[h];
+  const Eigen::Matrix3d R = geomRotation(d, g);
+  const Eigen::Vector3d p = geomPosition(d, g);
+  const double dx = 2.0 * size[0] / (ncol - 1), dy = 2.0 * size[1] / (nrow - 1);
+  auto local = [&](int r, int c, double z) {
+    return Eigen::Vector3d(dx * c - size[0], dy * r - size[1], z);
+  };
+  MeshBuilder mb;
+  mb.vertices.reserve(3 * (std::size_t(nrow) * ncol + 2 * (nrow + ncol)));
+  for (int r = 0; r < nrow; ++r)
+    for (int c = 0; c < ncol; ++c) mb.add(p + R * local(r, c, data[r * ncol + c] * size[2]));
+  auto top = [ncol](int r, int c) { return unsigned(r * ncol + c); };
+  for (int r = 0; r + 1 < nrow; ++r)
+    for (int c = 0; c + 1 < ncol; ++c) {
+      mb.tri(top(r, c), top(r + 1, c + 1), top(r, c + 1));
+      mb.tri(top(r, c), top(r + 1, c + 1), top(r + 1, c));
+    }
+  // Walls: walk the border; each border sample gets a partner on the base plane z = -size[3].
+  std::vector<std::pair<int, int>> ring;
+  for (int c = 0; c < ncol; ++c) ring.emplace_back(0, c);
+  for (int r = 1; r < nrow; ++r) ring.emplace_back(r, ncol - 1);
+  for (int c = ncol - 2; c >= 0; --c) ring.emplace_back(nrow - 1, c);
+  for (int r = nrow - 2; r >= 1; --r) ring.emplace_back(r, 0);
+  std::vector<unsigned> bottom;
+  for (auto [r, c] : ring) bottom.push_back(mb.add(p + R * local(r, c, -size[3])));
+  for (std::size_t i = 0; i < ring.size(); ++i) {
+    const std::size_t j = (i + 1) % ring.size();
+    const unsigned a = top(ring[i].first, ring[i].second), b = top(ring[j].first, ring[j].second);
+    mb.tri(a, b, bottom[j]);
+    mb.tri(a, bottom[j], bottom[i]);
+  }
+  const unsigned c0 = bottom[0], c1 = bottom[ncol - 1], c2 = bottom[ncol - 1 + nrow - 1],
+                 c3 = bottom[2 * (ncol - 1) + nrow - 1];
+  mb.tri(c0, c1, c2);
+  mb.tri(c0, c2, c3);
+  return mb;
+}
+
+MeshBuilder meshMesh(const mjModel* m, const mjData* d, int g) {
+  const int id = m->geom_dataid[g];
+  const Eigen::Matrix3d R = geomRotation(d, g);
+  const Eigen::Vector3d p = geomPosition(d, g);
+  MeshBuilder mb;
+  const float* v = m->mesh_vert + 3 * m->mesh_vertadr[id];
+  for (int i = 0; i < m->mesh_vertnum[id]; ++i)
+    mb.add(p + R * Eigen::Vector3d(v[3 * i], v[3 * i + 1], v[3 * i + 2]));
+  const int* f = m->mesh_face + 3 * m->mesh_faceadr[id];
+  for (int i = 0; i < m->mesh_facenum[id]; ++i) mb.tri(f[3 * i], f[3 * i + 1], f[3 * i + 2]);
+  return mb;
+}
+
+void attachMesh(RTCDevice device, RTCScene scene, const MeshBuilder& mb, unsigned id) {
+  RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                        RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                        mb.vertices.size() / 3));
+  auto* t = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0,
+                                                           RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                                           mb.triangles.size() / 3));
+  if (!v || !t) throw std::runtime_error("Embree: could not allocate a geometry buffer");
+  std::memcpy(v, mb.vertices.data(), mb.vertices.size() * sizeof(float));
+  std::memcpy(t, mb.triangles.data(), mb.triangles.size() * sizeof(unsigned));
+  rtcCommitGeometry(geom);
+  rtcAttachGeometryByID(scene, geom, id);
+  rtcReleaseGeometry(geom);
+}
+
+detail::PrimitiveType primitiveType(int mj_type) {
+  switch (mj_type) {
+    case mjGEOM_PLANE: return detail::PrimitiveType::Plane;
+    case mjGEOM_SPHERE: return detail::PrimitiveType::Sphere;
+    case mjGEOM_CAPSULE: return detail::PrimitiveType::Capsule;
+    case mjGEOM_ELLIPSOID: return detail::PrimitiveType::Ellipsoid;
+    case mjGEOM_CYLINDER: return detail::PrimitiveType::Cylinder;
+    case mjGEOM_BOX: return detail::PrimitiveType::Box;
+    default: throw std::runtime_error("RayScene: unsupported geom type " + std::to_string(mj_type));
+  }
+}
+
+void fillEmbreePacket(const RayPacket16& rays, RTCRayHit16& rh) {
+  std::memcpy(rh.ray.org_x, rays.ox, sizeof rays.ox);
+  std::memcpy(rh.ray.org_y, rays.oy, sizeof rays.oy);
+  std::memcpy(rh.ray.org_z, rays.oz, sizeof rays.oz);
+  std::memcpy(rh.ray.dir_x, rays.dx, sizeof rays.dx);
+  std::memcpy(rh.ray.dir_y, rays.dy, sizeof rays.dy);
+  std::memcpy(rh.ray.dir_z, rays.dz, sizeof rays.dz);
+  std::memcpy(rh.ray.tnear, rays.tnear, sizeof rays.tnear);
+  std::memcpy(rh.ray.tfar, rays.tfar, sizeof rays.tfar);
+  for (int i = 0; i < 16; ++i) {
+    rh.ray.time[i] = 0.0f;
+    rh.ray.mask[i] = 0xFFFFFFFFu;  // Debian's Embree has ray masks on
+    rh.ray.id[i] = unsigned(i);
+    rh.ray.flags[i] = 0;
+    rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+  }
+}
+
+}  // namespace
+
+struct RayScene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  std::string error;
+  std::deque<detail::Primitive> primitives;  // Embree keeps pointers to these
+  Eigen::AlignedBox3d bounds;
+
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+  void check(const char* what) const {
+    if (!error.empty()) throw std::runtime_error(std::string("RayScene: ") + what + ": " + error);
+  }
+};
+
+RayScene::RayScene(const World& world) : impl_(std::make_unique<Impl>()) {
+  const mjModel* m = world.model();
+  const mjData* d = world.data();
+  impl_->device = rtcNewDevice(nullptr);
+  if (!impl_->device) throw std::runtime_error("RayScene: could not create an Embree device");
+  rtcSetDeviceErrorFunction(impl_->device, onEmbreeError, &impl_->error);
+  impl_->scene = rtcNewScene(impl_->device);
+  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+  for (int g = 0; g < m->ngeom; ++g) {
+    if (!rayVisible(m, g)) continue;
+    const int type = m->geom_type[g];
+    if (type == mjGEOM_HFIELD) {
+      attachMesh(impl_->device, impl_->scene, hfieldMesh(m, d, g), unsigned(g));
+    } else if (type == mjGEOM_MESH) {
+      attachMesh(impl_->device, impl_->scene, meshMesh(m, d, g), unsigned(g));
+    } else {
+      detail::Primitive& p = impl_->primitives.emplace_back();
+      p.type = primitiveType(type);
+      p.pos = geomPosition(d, g);
+      p.rot = geomRotation(d, g);
+      p.size = Eigen::Vector3d(m->geom_size[3 * g], m->geom_size[3 * g + 1], m->geom_size[3 * g + 2]);
+      p.geom_id = unsigned(g);
+      detail::attachPrimitive(impl_->device, impl_->scene, &p);
+    }
+    impl_->check("building geometry");
+  }
+  rtcCommitScene(impl_->scene);
+  impl_->check("committing the scene");
+  RTCBounds b;
+  rtcGetSceneBounds(impl_->scene, &b);
+  impl_->bounds = Eigen::AlignedBox3d(Eigen::Vector3d(b.lower_x, b.lower_y, b.lower_z),
+                                      Eigen::Vector3d(b.upper_x, b.upper_y, b.upper_z));
+}
+
+RayScene::RayScene(RayScene&&) noexcept = default;
+RayScene& RayScene::operator=(RayScene&&) noexcept = default;
+RayScene::~RayScene() = default;
+
+void RayScene::intersect16(const RayPacket16& rays, HitPacket16& hits) const {
+  RTCRayHit16 rh;
+  fillEmbreePacket(rays, rh);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  rtcIntersect16(rays.valid, impl_->scene, &ctx, &rh);
+  for (int i = 0; i < 16; ++i) {
+    const bool hit = rays.valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
+    hits.t[i] = hit ? rh.ray.tfar[i] : std::numeric_limits<float>::infinity();
+    hits.geom[i] = hit ? int(rh.hit.geomID[i]) : -1;
+  }
+}
+
+std::optional<RayHit> RayScene::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                                          double tfar) const {
+  RTCRayHit rh{};
+  rh.ray.org_x = float(origin.x());
+  rh.ray.org_y = float(origin.y());
+  rh.ray.org_z = float(origin.z());
+  rh.ray.dir_x = float(dir.x());
+  rh.ray.dir_y = float(dir.y());
+  rh.ray.dir_z = float(dir.z());
+  rh.ray.tnear = 0.0f;
+  rh.ray.tfar = tfar < 3.0e38 ? float(tfar) : std::numeric_limits<float>::infinity();
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  rtcIntersect1(impl_->scene, &ctx, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  return RayHit{rh.ray.tfar, int(rh.hit.geomID)};
+}
+
+void RayScene::intersectMany(const std::vector<Eigen::Vector3d>& origins,
+                             const std::vector<Eigen::Vector3d>& dirs, std::vector<double>& t,
+                             std::vector<int>* geom) const {
+  if (origins.size() != dirs.size())
+    throw std::invalid_argument("RayScene::intersectMany: origins and dirs differ in size");
+  const std::size_t n = origins.size();
+  t.assign(n, std::numeric_limits<double>::infinity());
+  if (geom) geom->assign(n, -1);
+  const std::size_t packets = (n + 15) / 16;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, packets, 16), [&](const auto& range) {
+    RayPacket16 rays;
+    HitPacket16 hits;
+    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+      for (int i = 0; i < 16; ++i) {
+        const std::size_t k = std::min(p * 16 + i, n - 1);
+        rays.ox[i] = float(origins[k].x());
+        rays.oy[i] = float(origins[k].y());
+        rays.oz[i] = float(origins[k].z());
+        rays.dx[i] = float(dirs[k].x());
+        rays.dy[i] = float(dirs[k].y());
+        rays.dz[i] = float(dirs[k].z());
+        rays.tnear[i] = 0.0f;
+        rays.tfar[i] = std::numeric_limits<float>::infinity();
+        rays.valid[i] = p * 16 + i < n ? -1 : 0;
+      }
+      intersect16(rays, hits);
+      for (int i = 0; i < 16 && p * 16 + i < n; ++i) {
+        t[p * 16 + i] = hits.t[i];
+        if (geom) (*geom)[p * 16 + i] = hits.geom[i];
+      }
+    }
+  });
+}
+
+Eigen::AlignedBox3d RayScene::bounds() const { return impl_->bounds; }
+
+RTCSceneTy* RayScene::embreeScene() const { return impl_->scene; }
+
+}  // namespace ambler::sim

@@ -1,0 +1,68 @@
+#pragma once
+// Shared test fixtures for sim/: temporary directories and worlds made from terrains or MJCF.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "sim/ray_scene.hpp"
+#include "sim/world.hpp"
+#include "terrains/terrain.hpp"
+
+namespace ambler::test {
+
+class TempDir {
+ public:
+  TempDir() {
+    static int counter = 0;
+    path_ = std::filesystem::temp_directory_path() /
+            ("ambler-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A world written from `terrain` into a temporary directory and loaded back, with its ray scene.
+struct TerrainWorld {
+  TempDir dir;
+  std::unique_ptr<sim::World> world;
+  std::unique_ptr<sim::RayScene> scene;
+  explicit TerrainWorld(const terrains::Terrain& terrain) {
+    world = std::make_unique<sim::World>(sim::World::load(sim::writeWorld(terrain, dir.path(), "test")));
+    scene = std::make_unique<sim::RayScene>(*world);
+  }
+};
+
+// A world from inline MJCF text.
+struct MjcfWorld {
+  TempDir dir;
+  std::unique_ptr<sim::World> world;
+  std::unique_ptr<sim::RayScene> scene;
+  explicit MjcfWorld(const std::string& xml) {
+    world = std::make_unique<sim::World>(sim::World::fromString(xml, dir.path()));
+    scene = std::make_unique<sim::RayScene>(*world);
+  }
+};
+
+// A flat-sided plane heightfield z = z0 + a·x + b·y over [-half, half]², sampled every `cell`.
+inline terrains::Terrain planeTerrain(double a, double b, double z0, double half = 10.0, double cell = 0.1) {
+  const int n = int(std::lround(2 * half / cell)) + 1;
+  terrains::Terrain t{terrains::Heightfield(n, n, cell, {-half, -half}), {}};
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      const auto p = t.ground.position(r, c);
+      t.ground.at(r, c) = z0 + a * p.x() + b * p.y();
+    }
+  return t;
+}
+
+}  // namespace ambler::test
