@@ -3,6 +3,7 @@
 // Each intersects exactly as MuJoCo 2.2.2's mj_ray does (the same faces, the same front-face-only
 // plane), computed in double precision.
 #include <Eigen/Core>
+#include <optional>
 
 struct RTCDeviceTy;
 struct RTCSceneTy;
@@ -26,5 +27,9 @@ inline constexpr double kInfinitePlaneHalfExtent = 1e5;
 // `p` must outlive the scene (Embree keeps a pointer to it). Throws std::invalid_argument for a
 // non-finite pose or a size MuJoCo would reject, std::runtime_error if Embree refuses the geometry.
 void attachPrimitive(RTCDeviceTy* device, RTCSceneTy* scene, const Primitive* p);
+
+// The nearest non-negative distance at which the double-precision ray o + t·d meets `p`, as
+// mj_ray computes it; nullopt on a miss.
+std::optional<double> primitiveDistance(const Primitive& p, const Eigen::Vector3d& o, const Eigen::Vector3d& d);
 
 }  // namespace ambler::sim::detail

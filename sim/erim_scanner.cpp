@@ -115,6 +115,7 @@ Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const 
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tile_rows, 0, tile_cols), [&](const auto& range) {
     RayPacket16 rays;
     std::array<HitPacket16, kFootprintSamples> hits;
+    std::array<Eigen::Vector3d, 16> central;  // the central rays in double, for exact distances
     for (int i = 0; i < 16; ++i) {
       rays.ox[i] = float(o.x());
       rays.oy[i] = float(o.y());
@@ -135,9 +136,13 @@ Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const 
             rays.dy[i] = float(d.y());
             rays.dz[i] = float(d.z());
             rays.tfar[i] = kInf;
+            if (k == 0) central[i] = d;
           }
           scene_.intersect16(rays, hits[k]);
         }
+        for (int i = 0; i < 16; ++i)
+          if (rays.valid[i] && hits[0].geom[i] >= 0)
+            hits[0].t[i] = float(scene_.exactDistance(hits[0].geom[i], hits[0].prim[i], o, central[i], hits[0].t[i]));
         for (int i = 0; i < 16; ++i) {
           if (!rays.valid[i]) continue;
           const int r = tr * 4 + i / 4, c = tc * 4 + i % 4;
@@ -146,11 +151,7 @@ Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const 
           if (t0 < kInf) {
             out.true_range(r, c) = t0;
             out.geom(r, c) = hits[0].geom[i];
-            const double ct = tables[0].cos_theta[c];
-            const Eigen::Vector3d dir =
-                R * Eigen::Vector3d(tables[0].sin_theta[c], tables[0].cos_phi[r] * ct,
-                                    tables[0].sin_phi[r] * ct);
-            out.true_hit.row(pixel) = (o + double(t0) * dir).cast<float>().transpose();
+            out.true_hit.row(pixel) = (o + double(t0) * central[i]).cast<float>().transpose();
           }
           // The reported range: the power-weighted mean over the footprint (returned power of an
           // extended target falls as 1/ρ²). Fewer than half the footprint returning: no return.

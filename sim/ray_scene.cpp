@@ -38,19 +38,23 @@ bool rayVisible(const mjModel* m, int g) {
   return mat < 0 ? m->geom_rgba[4 * g + 3] != 0 : m->mat_rgba[4 * mat + 3] != 0;
 }
 
+// A triangle mesh in world coordinates, kept in double precision for refining Embree's hits.
 struct MeshBuilder {
-  std::vector<float> vertices;        // x, y, z
+  std::vector<double> vertices;       // x, y, z
   std::vector<unsigned> triangles;    // i, j, k
   unsigned add(const Eigen::Vector3d& p) {
-    vertices.insert(vertices.end(), {float(p.x()), float(p.y()), float(p.z())});
+    vertices.insert(vertices.end(), {p.x(), p.y(), p.z()});
     return unsigned(vertices.size() / 3 - 1);
+  }
+  Eigen::Vector3d vertex(unsigned i) const {
+    return {vertices[3 * i], vertices[3 * i + 1], vertices[3 * i + 2]};
   }
   void tri(unsigned a, unsigned b, unsigned c) { triangles.insert(triangles.end(), {a, b, c}); }
 };
 
-// MuJoCo's hfield as a closed solid: the top surface split along (r,c)–(r+1,c+1) exactly as
-// mj_rayHfield does, the four walls down to the base (mj_ray hits the box sides below the edge
-// profile and the base box), and the bottom.
+// MuJoCo's hfield as mj_rayHfield sees it: the top surface split along (r,c)–(r+1,c+1), the four
+// walls from the edge profile down to the base (mj_ray hits the box sides below the profile and
+// the base box), the bottom, and the base box's top face.
 MeshBuilder hfieldMesh(const mjModel* m, const mjData* d, int g) {
   const int h = m->geom_dataid[g];
   const int nrow = m->hfield_nrow[h], ncol = m->hfield_ncol[h];
@@ -73,6 +77,14 @@ MeshBuilder hfieldMesh(const mjModel* m, const mjData* d, int g) {
       mb.tri(top(r, c), top(r + 1, c + 1), top(r + 1, c));
     }
   // Walls: walk the border; each border sample gets a partner on the base plane z = -size[3].
+  // mj_rayHfield (2.2.2) reads the profile of the two walls normal to x at data[r·nrow + c]
+  // (sic: nrow, not ncol). Where that index is inside the data we reproduce it, so the walls
+  // agree with mj_ray on non-square fields too; for square fields it is the true edge profile.
+  auto wallHeight = [&](int r, int c, bool x_side) {
+    const long quirk = long(r) * nrow + c;
+    const long idx = x_side && quirk < long(nrow) * ncol ? quirk : long(r) * ncol + c;
+    return data[idx] * size[2];
+  };
   std::vector<std::pair<int, int>> ring;
   for (int c = 0; c < ncol; ++c) ring.emplace_back(0, c);
   for (int r = 1; r < nrow; ++r) ring.emplace_back(r, ncol - 1);
@@ -82,7 +94,11 @@ MeshBuilder hfieldMesh(const mjModel* m, const mjData* d, int g) {
   for (auto [r, c] : ring) bottom.push_back(mb.add(p + R * local(r, c, -size[3])));
   for (std::size_t i = 0; i < ring.size(); ++i) {
     const std::size_t j = (i + 1) % ring.size();
-    const unsigned a = top(ring[i].first, ring[i].second), b = top(ring[j].first, ring[j].second);
+    const auto [ri, ci] = ring[i];
+    const auto [rj, cj] = ring[j];
+    const bool x_side = ci == cj && (ci == 0 || ci == ncol - 1);
+    const unsigned a = mb.add(p + R * local(ri, ci, wallHeight(ri, ci, x_side)));
+    const unsigned b = mb.add(p + R * local(rj, cj, wallHeight(rj, cj, x_side)));
     mb.tri(a, b, bottom[j]);
     mb.tri(a, bottom[j], bottom[i]);
   }
@@ -90,6 +106,12 @@ MeshBuilder hfieldMesh(const mjModel* m, const mjData* d, int g) {
                  c3 = bottom[2 * (ncol - 1) + nrow - 1];
   mb.tri(c0, c1, c2);
   mb.tri(c0, c2, c3);
+  // mj_ray also hits the top of the base box (z = 0, under the surface), which a ray that slipped
+  // under the surface through a side reaches.
+  const unsigned d0 = mb.add(p + R * local(0, 0, 0)), d1 = mb.add(p + R * local(0, ncol - 1, 0)),
+                 d2 = mb.add(p + R * local(nrow - 1, ncol - 1, 0)), d3 = mb.add(p + R * local(nrow - 1, 0, 0));
+  mb.tri(d0, d1, d2);
+  mb.tri(d0, d2, d3);
   return mb;
 }
 
@@ -115,7 +137,7 @@ void attachMesh(RTCDevice device, RTCScene scene, const MeshBuilder& mb, unsigne
                                                            RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
                                                            mb.triangles.size() / 3));
   if (!v || !t) throw std::runtime_error("Embree: could not allocate a geometry buffer");
-  std::memcpy(v, mb.vertices.data(), mb.vertices.size() * sizeof(float));
+  for (std::size_t i = 0; i < mb.vertices.size(); ++i) v[i] = float(mb.vertices[i]);
   std::memcpy(t, mb.triangles.data(), mb.triangles.size() * sizeof(unsigned));
   rtcCommitGeometry(geom);
   rtcAttachGeometryByID(scene, geom, id);
@@ -160,6 +182,8 @@ struct RayScene::Impl {
   RTCScene scene = nullptr;
   std::string error;
   std::deque<detail::Primitive> primitives;  // Embree keeps pointers to these
+  std::vector<const detail::Primitive*> primitive_of;  // by geom id
+  std::vector<MeshBuilder> triangles_of;               // by geom id; empty for primitives
   Eigen::AlignedBox3d bounds;
 
   ~Impl() {
@@ -179,13 +203,14 @@ RayScene::RayScene(const World& world) : impl_(std::make_unique<Impl>()) {
   rtcSetDeviceErrorFunction(impl_->device, onEmbreeError, &impl_->error);
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+  impl_->primitive_of.assign(m->ngeom, nullptr);
+  impl_->triangles_of.resize(m->ngeom);
   for (int g = 0; g < m->ngeom; ++g) {
     if (!rayVisible(m, g)) continue;
     const int type = m->geom_type[g];
-    if (type == mjGEOM_HFIELD) {
-      attachMesh(impl_->device, impl_->scene, hfieldMesh(m, d, g), unsigned(g));
-    } else if (type == mjGEOM_MESH) {
-      attachMesh(impl_->device, impl_->scene, meshMesh(m, d, g), unsigned(g));
+    if (type == mjGEOM_HFIELD || type == mjGEOM_MESH) {
+      impl_->triangles_of[g] = type == mjGEOM_HFIELD ? hfieldMesh(m, d, g) : meshMesh(m, d, g);
+      attachMesh(impl_->device, impl_->scene, impl_->triangles_of[g], unsigned(g));
     } else {
       detail::Primitive& p = impl_->primitives.emplace_back();
       p.type = primitiveType(type);
@@ -193,6 +218,7 @@ RayScene::RayScene(const World& world) : impl_(std::make_unique<Impl>()) {
       p.rot = geomRotation(d, g);
       p.size = Eigen::Vector3d(m->geom_size[3 * g], m->geom_size[3 * g + 1], m->geom_size[3 * g + 2]);
       p.geom_id = unsigned(g);
+      impl_->primitive_of[g] = &p;
       detail::attachPrimitive(impl_->device, impl_->scene, &p);
     }
     impl_->check("building geometry");
@@ -220,7 +246,25 @@ void RayScene::intersect16(const RayPacket16& rays, HitPacket16& hits) const {
     const bool hit = rays.valid[i] && rh.hit.geomID[i] != RTC_INVALID_GEOMETRY_ID;
     hits.t[i] = hit ? rh.ray.tfar[i] : std::numeric_limits<float>::infinity();
     hits.geom[i] = hit ? int(rh.hit.geomID[i]) : -1;
+    hits.prim[i] = hit ? rh.hit.primID[i] : 0;
   }
+}
+
+double RayScene::exactDistance(int geom, unsigned prim, const Eigen::Vector3d& o,
+                               const Eigen::Vector3d& d, double t) const {
+  if (geom < 0 || geom >= int(impl_->triangles_of.size())) return t;
+  if (const detail::Primitive* p = impl_->primitive_of[geom])
+    return detail::primitiveDistance(*p, o, d).value_or(t);
+  const MeshBuilder& mesh = impl_->triangles_of[geom];
+  if (3 * std::size_t(prim) + 2 >= mesh.triangles.size()) return t;
+  const Eigen::Vector3d v0 = mesh.vertex(mesh.triangles[3 * prim]);
+  const Eigen::Vector3d n = (mesh.vertex(mesh.triangles[3 * prim + 1]) - v0)
+                                .cross(mesh.vertex(mesh.triangles[3 * prim + 2]) - v0);
+  const double den = n.dot(d);
+  if (den == 0.0) return t;
+  const double exact = n.dot(v0 - o) / den;
+  // A float hit is within ~1e-6 relative of the plane's; anything farther is not this plane.
+  return std::abs(exact - t) <= 1e-4 * (1.0 + std::abs(t)) ? exact : t;
 }
 
 std::optional<RayHit> RayScene::intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
@@ -241,7 +285,8 @@ std::optional<RayHit> RayScene::intersect(const Eigen::Vector3d& origin, const E
   rtcInitIntersectContext(&ctx);
   rtcIntersect1(impl_->scene, &ctx, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-  return RayHit{rh.ray.tfar, int(rh.hit.geomID)};
+  const int geom = int(rh.hit.geomID);
+  return RayHit{exactDistance(geom, rh.hit.primID, origin, dir, rh.ray.tfar), geom};
 }
 
 void RayScene::intersectMany(const std::vector<Eigen::Vector3d>& origins,
@@ -271,8 +316,9 @@ void RayScene::intersectMany(const std::vector<Eigen::Vector3d>& origins,
       }
       intersect16(rays, hits);
       for (int i = 0; i < 16 && p * 16 + i < n; ++i) {
-        t[p * 16 + i] = hits.t[i];
-        if (geom) (*geom)[p * 16 + i] = hits.geom[i];
+        const std::size_t k = p * 16 + i;
+        if (hits.geom[i] >= 0) t[k] = exactDistance(hits.geom[i], hits.prim[i], origins[k], dirs[k], hits.t[i]);
+        if (geom) (*geom)[k] = hits.geom[i];
       }
     }
   });

@@ -24,8 +24,9 @@ struct alignas(64) RayPacket16 {
 };
 
 struct alignas(64) HitPacket16 {
-  float t[16];     // distance along the ray; +inf on a miss
-  int geom[16];    // MuJoCo geom id; -1 on a miss
+  float t[16];        // distance along the ray (float32, as Embree found it); +inf on a miss
+  int geom[16];       // MuJoCo geom id; -1 on a miss
+  unsigned prim[16];  // triangle index within the geom (0 for primitives)
 };
 
 struct RayHit {
@@ -42,14 +43,23 @@ class RayScene {
   RayScene& operator=(RayScene&&) noexcept;
   ~RayScene();
 
-  // Casts one coherent packet. Thread-safe.
+  // Casts one coherent packet in float32. Thread-safe.
   void intersect16(const RayPacket16& rays, HitPacket16& hits) const;
 
-  // One ray; `dir` need not be unit (t is then in units of |dir|, as mj_ray). Thread-safe.
+  // The distance to a hit that intersect16 found, recomputed in double precision for the double
+  // ray (o, d): the plane of the hit triangle, or the primitive's analytic surface. Embree works
+  // in float32 (about 1e-6 relative); this matches mj_ray to ~1e-9 m. Returns `t` if the double
+  // computation disagrees (a ray grazing an edge).
+  double exactDistance(int geom, unsigned prim, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                       double t) const;
+
+  // One ray, refined to double precision; `dir` need not be unit (t is then in units of |dir|,
+  // as mj_ray). Thread-safe.
   std::optional<RayHit> intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
                                   double tfar = std::numeric_limits<double>::infinity()) const;
 
-  // Many rays at once, in parallel packets over all cores. `t` gets +inf on a miss.
+  // Many rays at once, in parallel packets over all cores, refined to double precision. `t` gets
+  // +inf on a miss.
   void intersectMany(const std::vector<Eigen::Vector3d>& origins,
                      const std::vector<Eigen::Vector3d>& dirs, std::vector<double>& t,
                      std::vector<int>* geom = nullptr) const;

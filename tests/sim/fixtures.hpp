@@ -4,8 +4,13 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <memory>
+#include <cstdint>
+#include <cstring>
 #include <string>
+#include <vector>
 
 #include "sim/ray_scene.hpp"
 #include "sim/world.hpp"
@@ -42,12 +47,13 @@ struct TerrainWorld {
   }
 };
 
-// A world from inline MJCF text.
+// A world from inline MJCF text, with asset files (name → bytes) written beside it first.
 struct MjcfWorld {
   TempDir dir;
   std::unique_ptr<sim::World> world;
   std::unique_ptr<sim::RayScene> scene;
-  explicit MjcfWorld(const std::string& xml) {
+  explicit MjcfWorld(const std::string& xml, const std::map<std::string, std::string>& files = {}) {
+    for (const auto& [name, bytes] : files) std::ofstream(dir.path() / name, std::ios::binary) << bytes;
     world = std::make_unique<sim::World>(sim::World::fromString(xml, dir.path()));
     scene = std::make_unique<sim::RayScene>(*world);
   }
@@ -63,6 +69,15 @@ inline terrains::Terrain planeTerrain(double a, double b, double z0, double half
       t.ground.at(r, c) = z0 + a * p.x() + b * p.y();
     }
   return t;
+}
+
+// MuJoCo's binary hfield file (int32 rows, int32 cols, float32 data, row 0 at the smallest y).
+inline std::string hfieldFile(int rows, int cols, const std::vector<float>& data) {
+  std::string bytes(8, '\0');
+  const std::int32_t dims[2] = {rows, cols};
+  std::memcpy(bytes.data(), dims, 8);
+  bytes.append(reinterpret_cast<const char*>(data.data()), data.size() * sizeof(float));
+  return bytes;
 }
 
 }  // namespace ambler::test

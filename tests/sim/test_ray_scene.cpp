@@ -86,7 +86,7 @@ TEST(RayScene, AgreesWithMjRayOnEveryGeomType) {
   const MjcfWorld w(R"(
 <mujoco>
   <asset>
-    <hfield name="hf" nrow="3" ncol="4" size="2 1.5 0.5 0.3" elevation="0 1 0 2 1 0 2 1 3 0 1 2"/>
+    <hfield name="hf" file="hf.bin" size="2 1.5 0.5 0.3"/>
     <mesh name="tet" vertex="0 0 0  1 0 0  0 1 0  0 0 1"/>
   </asset>
   <worldbody>
@@ -99,7 +99,8 @@ TEST(RayScene, AgreesWithMjRayOnEveryGeomType) {
     <geom type="box" size="0.4 0.3 0.2" pos="2 -2 0.4" euler="0.3 0.5 0.7"/>
     <geom type="mesh" mesh="tet" pos="0 -2.5 0.2" euler="0.2 0.1 0.5"/>
   </worldbody>
-</mujoco>)");
+</mujoco>)",
+                    {{"hf.bin", test::hfieldFile(3, 4, {0, 1, 0, 2, 1, 0, 2, 1, 3, 0, 1, 2})}});
   terrains::Rng rng(5);
   int hits = 0;
   for (int i = 0; i < 20000; ++i) {
@@ -152,8 +153,12 @@ TEST(GroundTruth, WallCastsTheAnalyticShadow) {
         EXPECT_EQ(v, Visibility::Hidden) << p.transpose();
         ++hidden;
       }
-      if (p.y() > 8.5 && p.y() < 11 && std::abs(p.x()) < 1.5) EXPECT_EQ(v, Visibility::Visible) << p.transpose();
-      if (p.y() < 3.9 && p.y() > 2.0 && std::abs(p.x()) < 0.5) EXPECT_EQ(v, Visibility::Visible) << p.transpose();
+      if (p.y() > 8.5 && p.y() < 11 && std::abs(p.x()) < 1.5) {
+        EXPECT_EQ(v, Visibility::Visible) << p.transpose();
+      }
+      if (p.y() < 3.9 && p.y() > 2.0 && std::abs(p.x()) < 0.5) {
+        EXPECT_EQ(v, Visibility::Visible) << p.transpose();
+      }
     }
   EXPECT_GT(hidden, 1000);
   EXPECT_GT(visible, 500);
