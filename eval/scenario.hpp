@@ -66,7 +66,8 @@ Scenario loadScenario(const std::filesystem::path& file);
 Scenario parseScenario(const std::string& yaml_text, const std::filesystem::path& file);
 
 // The scenario with every default filled in, as YAML (degrees, as in the input).
-// parseScenario(resolvedYaml(s)) gives back s.
+// parseScenario(resolvedYaml(s), s.file) gives back s bit for bit when s came from parseScenario;
+// an angle set in code as radians may read back one ulp off (no degree double maps onto it).
 std::string resolvedYaml(const Scenario& scenario);
 
 }  // namespace ambler::eval

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Bad input to the CLI: one line on stderr naming the file and the key or cause, a non-zero exit,
+# and nothing written.
+set -u
+ambler=$1
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+fail=0
+expect_error() {  # name, pattern, args...
+  local name=$1 pattern=$2; shift 2
+  "$ambler" "$@" >"$tmp/out" 2>"$tmp/err"
+  local rc=$?
+  local lines
+  lines=$(wc -l <"$tmp/err")
+  if [[ $rc -eq 0 ]]; then echo "FAIL $name: exit 0"; fail=1; return; fi
+  if [[ $lines -ne 1 ]]; then echo "FAIL $name: $lines lines on stderr:"; cat "$tmp/err"; fail=1; return; fi
+  if ! grep -qE -- "$pattern" "$tmp/err"; then echo "FAIL $name: '$(cat "$tmp/err")' does not match '$pattern'"; fail=1; return; fi
+  echo "ok   $name: $(cat "$tmp/err")"
+}
+expect_error missing_file 'nope\.yaml: .*(cannot open|not found|does not exist)' run "$tmp/nope.yaml" --out "$tmp/run1"
+printf 'name: x\nterrain: {kind: plane, relif_m: 1}\nviews: [{xyz_m: [0,0,1]}]\n' >"$tmp/unknown.yaml"
+expect_error unknown_key 'unknown\.yaml: terrain\.relif_m' run "$tmp/unknown.yaml" --out "$tmp/run2"
+printf 'name: x\nterrain: {kind: plane}\nsensor: {rows: many}\nviews: [{xyz_m: [0,0,1]}]\n' >"$tmp/type.yaml"
+expect_error wrong_type 'type\.yaml: sensor\.rows' run "$tmp/type.yaml" --out "$tmp/run3"
+printf 'name: x\nterrain: {kind: plane}\nsensor: {noise_k: -1}\nviews: [{xyz_m: [0,0,1]}]\n' >"$tmp/range.yaml"
+expect_error out_of_range 'range\.yaml: sensor\.noise_k' run "$tmp/range.yaml" --out "$tmp/run4"
+printf 'name: x\nterrain: {kind: plane}\nviews: [{xyz_m: [0,0,.nan]}]\n' >"$tmp/nan.yaml"
+expect_error nan_value 'nan\.yaml: views\[0\]\.xyz_m' run "$tmp/nan.yaml" --out "$tmp/run5"
+for k in 1 2 3 4 5; do
+  if [[ -e $tmp/run$k ]]; then echo "FAIL: $tmp/run$k was created for a bad scenario"; fail=1; fi
+done
+if ((fail)); then echo "1 failed"; exit 1; fi
+echo "cli errors: all passed"

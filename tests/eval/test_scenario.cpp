@@ -1,0 +1,650 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <bit>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <random>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "eval/scenario.hpp"
+
+namespace ambler::eval {
+namespace {
+
+namespace fs = std::filesystem;
+using terrains::TerrainKind;
+
+const fs::path kScenarios = fs::path(AMBLER_SOURCE_DIR) / "scenarios";
+const std::string kFile = "scenarios/x.yaml";
+const std::string kMinimal = "name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}]\n";
+
+double deg(double d) { return d * std::numbers::pi / 180.0; }
+std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v); }
+
+// Bit-for-bit equality of two doubles (distinguishes -0 from 0).
+#define EXPECT_SAME(a, b) EXPECT_EQ(bits(a), bits(b)) << #a << " = " << (a) << " vs " << (b)
+
+void expectSame(const Scenario& a, const Scenario& b) {
+  EXPECT_EQ(a.file, b.file);
+  EXPECT_EQ(a.name, b.name);
+  EXPECT_EQ(a.description, b.description);
+  EXPECT_EQ(a.seed, b.seed);
+  const auto &ta = a.terrain, &tb = b.terrain;
+  EXPECT_EQ(ta.kind, tb.kind);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_SAME(ta.size_m[i], tb.size_m[i]);
+    EXPECT_SAME(ta.slope_deg[i], tb.slope_deg[i]);
+  }
+  EXPECT_SAME(ta.cell_m, tb.cell_m);
+  EXPECT_SAME(ta.relief_m, tb.relief_m);
+  EXPECT_SAME(ta.hurst, tb.hurst);
+  ASSERT_EQ(ta.sinusoid.has_value(), tb.sinusoid.has_value());
+  if (ta.sinusoid) {
+    EXPECT_SAME(ta.sinusoid->amplitude_m, tb.sinusoid->amplitude_m);
+    EXPECT_SAME(ta.sinusoid->wavelength_m, tb.sinusoid->wavelength_m);
+  }
+  ASSERT_EQ(ta.steps.size(), tb.steps.size());
+  for (std::size_t i = 0; i < ta.steps.size(); ++i) {
+    EXPECT_SAME(ta.steps[i].x_m, tb.steps[i].x_m);
+    EXPECT_SAME(ta.steps[i].height_m, tb.steps[i].height_m);
+  }
+  ASSERT_EQ(ta.rocks.has_value(), tb.rocks.has_value());
+  if (ta.rocks) {
+    EXPECT_SAME(ta.rocks->abundance_k, tb.rocks->abundance_k);
+    EXPECT_SAME(ta.rocks->min_diameter_m, tb.rocks->min_diameter_m);
+    EXPECT_SAME(ta.rocks->max_diameter_m, tb.rocks->max_diameter_m);
+  }
+  ASSERT_EQ(ta.craters.has_value(), tb.craters.has_value());
+  if (ta.craters) {
+    EXPECT_EQ(ta.craters->count, tb.craters->count);
+    EXPECT_SAME(ta.craters->min_diameter_m, tb.craters->min_diameter_m);
+    EXPECT_SAME(ta.craters->max_diameter_m, tb.craters->max_diameter_m);
+    EXPECT_SAME(ta.craters->sfd_exponent, tb.craters->sfd_exponent);
+  }
+  EXPECT_EQ(ta.mjcf, tb.mjcf);
+
+  const auto &sa = a.sensor, &sb = b.sensor;
+  EXPECT_EQ(sa.rows, sb.rows);
+  EXPECT_EQ(sa.cols, sb.cols);
+  EXPECT_SAME(sa.fov_v_rad, sb.fov_v_rad);
+  EXPECT_SAME(sa.fov_h_rad, sb.fov_h_rad);
+  EXPECT_SAME(sa.noise_k, sb.noise_k);
+  EXPECT_SAME(sa.quantization_m, sb.quantization_m);
+  EXPECT_SAME(sa.ambiguity_m, sb.ambiguity_m);
+  EXPECT_EQ(sa.mixed_pixels, sb.mixed_pixels);
+  EXPECT_SAME(sa.max_range_m, sb.max_range_m);
+  EXPECT_SAME(sa.beam_divergence_rad, sb.beam_divergence_rad);
+  EXPECT_SAME(sa.dropout, sb.dropout);
+
+  ASSERT_EQ(a.views.size(), b.views.size());
+  for (std::size_t v = 0; v < a.views.size(); ++v) {
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_SAME(a.views[v].xyz_m[i], b.views[v].xyz_m[i]);
+      EXPECT_SAME(a.views[v].rpy_rad[i], b.views[v].rpy_rad[i]);
+    }
+  }
+
+  ASSERT_EQ(a.map.has_value(), b.map.has_value());
+  if (a.map) {
+    EXPECT_SAME(a.map->cell_m, b.map->cell_m);
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_SAME(a.map->x_m[i], b.map->x_m[i]);
+      EXPECT_SAME(a.map->y_m[i], b.map->y_m[i]);
+    }
+    EXPECT_SAME(a.map->epsilon_rad, b.map->epsilon_rad);
+    EXPECT_EQ(a.map->shadows, b.map->shadows);
+    EXPECT_EQ(a.map->baseline, b.map->baseline);
+  }
+}
+
+// parseScenario(resolvedYaml(s)) == s, and resolving again changes nothing.
+void expectRoundTrip(const Scenario& s) {
+  const std::string resolved = resolvedYaml(s);
+  SCOPED_TRACE(resolved);
+  const Scenario back = parseScenario(resolved, s.file);
+  expectSame(s, back);
+  EXPECT_EQ(resolvedYaml(back), resolved);
+}
+
+std::string errorOf(const std::string& yaml) {
+  try {
+    parseScenario(yaml, kFile);
+  } catch (const ScenarioError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+// The message is one line, starts with the file and the exact key path, and says `what`.
+void expectError(const std::string& yaml, const std::string& key_path, const std::string& what) {
+  const std::string message = errorOf(yaml);
+  SCOPED_TRACE(yaml);
+  const std::string prefix = kFile + ": " + (key_path.empty() ? "" : key_path + ": ");
+  EXPECT_EQ(message.rfind(prefix, 0), 0u) << message;
+  EXPECT_NE(message.find(what), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+}
+
+// A scratch directory removed at the end of the test.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    path = fs::temp_directory_path() /
+           ("ambler_test_scenario_" + std::to_string(std::random_device{}()));
+    fs::create_directories(path);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+};
+
+// ---------------------------------------------------------------------------------------------
+// The example scenarios
+
+TEST(ScenarioExamples, EveryExampleLoadsAndRoundTrips) {
+  std::set<std::string> names;
+  for (const auto& entry : fs::directory_iterator(kScenarios)) {
+    // Sweep files may live beside the scenarios; they are not scenarios.
+    const std::string filename = entry.path().filename().string();
+    if (entry.path().extension() != ".yaml" || filename.find("sweep") != std::string::npos)
+      continue;
+    SCOPED_TRACE(entry.path().string());
+    const Scenario s = loadScenario(entry.path());
+    EXPECT_EQ(s.file, entry.path());
+    names.insert(entry.path().stem().string());
+    expectRoundTrip(s);
+  }
+  for (const char* name : {"demo", "plane", "ledge", "mars"})
+    EXPECT_TRUE(names.count(name)) << name;
+}
+
+TEST(ScenarioExamples, DemoIsTheDocumentedOne) {
+  const Scenario s = loadScenario(kScenarios / "demo.yaml");
+  EXPECT_EQ(s.terrain.kind, TerrainKind::Mars);
+  EXPECT_EQ(s.terrain.size_m, Eigen::Vector2d(20, 20));
+  EXPECT_EQ(s.terrain.cell_m, 0.05);
+  ASSERT_TRUE(s.terrain.rocks);
+  EXPECT_EQ(s.terrain.rocks->abundance_k, 0.08);
+  ASSERT_TRUE(s.terrain.craters);
+  EXPECT_EQ(s.terrain.craters->count, 4);
+  ASSERT_EQ(s.views.size(), 2u);
+  EXPECT_EQ(s.views[0].xyz_m, Eigen::Vector3d(0, -6, 3));
+  EXPECT_EQ(s.views[0].rpy_rad, Eigen::Vector3d(0, deg(-30), 0));
+  EXPECT_EQ(s.views[1].xyz_m, Eigen::Vector3d(0, -5, 3));
+  EXPECT_EQ(s.views[1].rpy_rad, Eigen::Vector3d(0, deg(-30), deg(5)));
+  ASSERT_TRUE(s.map);
+  EXPECT_EQ(s.map->cell_m, 0.10);
+  EXPECT_EQ(s.map->x_m, Eigen::Vector2d(-5, 5));
+  EXPECT_EQ(s.map->y_m, Eigen::Vector2d(-3, 8));
+  EXPECT_EQ(s.map->epsilon_rad, 1.0e-5);
+  EXPECT_EQ(s.map->shadows, "gnc");
+  EXPECT_EQ(s.map->baseline, "cartesian");
+  // The sensor block is the ERIM defaults written out.
+  const SensorSpec erim;
+  EXPECT_EQ(s.sensor.rows, erim.rows);
+  EXPECT_EQ(s.sensor.cols, erim.cols);
+  EXPECT_EQ(s.sensor.fov_v_rad, erim.fov_v_rad);
+  EXPECT_EQ(s.sensor.fov_h_rad, erim.fov_h_rad);
+  EXPECT_EQ(s.sensor.noise_k, erim.noise_k);
+  EXPECT_EQ(s.sensor.quantization_m, erim.quantization_m);
+  EXPECT_EQ(s.sensor.ambiguity_m, erim.ambiguity_m);
+  EXPECT_EQ(s.sensor.mixed_pixels, erim.mixed_pixels);
+  EXPECT_EQ(s.sensor.max_range_m, erim.max_range_m);
+}
+
+// The ledge example must show a shadow: the sight line over the edge is inside the field of view
+// and lands on the low ground inside the map region, leaving a strip behind the edge hidden.
+TEST(ScenarioExamples, LedgeEdgeCastsAShadowInsideTheMap) {
+  const Scenario s = loadScenario(kScenarios / "ledge.yaml");
+  ASSERT_EQ(s.terrain.kind, TerrainKind::Steps);
+  ASSERT_EQ(s.terrain.steps.size(), 1u);
+  const double edge_x = s.terrain.steps[0].x_m;
+  const double height = s.terrain.steps[0].height_m;
+  EXPECT_EQ(height, 0.4);
+  const Eigen::Vector3d p = s.views[0].xyz_m;
+  const Eigen::Vector3d rpy = s.views[0].rpy_rad;
+  ASSERT_GT(p.x(), edge_x);  // on the top, looking back over the edge
+  // R = Rz(yaw)·Ry(roll)·Rx(pitch), SCENARIO.md.
+  const Eigen::Matrix3d r = (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  const Eigen::Vector3d edge(edge_x, 0.0, height);
+  const Eigen::Vector3d d = r.transpose() * (edge - p);  // sensor frame: x right, y forward, z up
+  const double theta = std::asin(d.x() / d.norm());      // eq. 1
+  const double phi = std::atan2(d.z(), d.y());
+  EXPECT_GT(d.y(), 0.0);
+  EXPECT_LT(std::abs(phi), s.sensor.fov_v_rad / 2);
+  EXPECT_LT(std::abs(theta), s.sensor.fov_h_rad / 2);
+  // The grazing ray continues to z = 0 at x = edge − height·(p.x − edge)/(p.z − height).
+  const double shadow_end = edge_x - height * (p.x() - edge_x) / (p.z() - height);
+  EXPECT_NEAR(shadow_end, -0.4 * 5.0 / 3.0, 1e-12);
+  ASSERT_TRUE(s.map);
+  EXPECT_LT(s.map->x_m[0], shadow_end);
+  EXPECT_GT(s.map->x_m[1], edge_x);
+  EXPECT_GT(edge_x - shadow_end, 10 * s.map->cell_m);  // many cells deep
+}
+
+// ---------------------------------------------------------------------------------------------
+// Defaults
+
+TEST(ScenarioDefaults, SensorDefaultsAreTheErimValues) {
+  for (const std::string extra : {"", "sensor: {}\n"}) {
+    const Scenario s = parseScenario(kMinimal + extra, kFile);
+    EXPECT_EQ(s.sensor.rows, 64);
+    EXPECT_EQ(s.sensor.cols, 256);
+    EXPECT_SAME(s.sensor.fov_v_rad, 30.0 * std::numbers::pi / 180.0);
+    EXPECT_SAME(s.sensor.fov_h_rad, 80.0 * std::numbers::pi / 180.0);
+    EXPECT_EQ(s.sensor.noise_k, 0.0003);
+    EXPECT_EQ(s.sensor.quantization_m, 0.0762);
+    EXPECT_EQ(s.sensor.ambiguity_m, 19.5);
+    EXPECT_TRUE(s.sensor.mixed_pixels);
+    EXPECT_EQ(s.sensor.max_range_m, 40.0);
+    EXPECT_EQ(s.sensor.beam_divergence_rad, 0.0);
+    EXPECT_EQ(s.sensor.dropout, 0.0);
+  }
+  // Writing the defaults out gives the same radians as leaving them out.
+  const Scenario written = parseScenario(kMinimal + "sensor: {fov_deg: [30, 80]}\n", kFile);
+  EXPECT_SAME(written.sensor.fov_v_rad, SensorSpec{}.fov_v_rad);
+  EXPECT_SAME(written.sensor.fov_h_rad, SensorSpec{}.fov_h_rad);
+}
+
+TEST(ScenarioDefaults, OtherDefaultsAreTheDocumentedOnes) {
+  const Scenario s = parseScenario(kMinimal, kFile);
+  EXPECT_EQ(s.seed, 0u);
+  EXPECT_EQ(s.description, "");
+  EXPECT_FALSE(s.map);  // no map: section, no maps
+  EXPECT_EQ(s.views[0].rpy_rad, Eigen::Vector3d::Zero());
+  const terrains::TerrainSpec t;
+  EXPECT_EQ(s.terrain.size_m, Eigen::Vector2d(20, 20));
+  EXPECT_EQ(s.terrain.size_m, t.size_m);
+  EXPECT_EQ(s.terrain.cell_m, 0.05);
+  EXPECT_EQ(s.terrain.relief_m, 0.6);
+  EXPECT_EQ(s.terrain.hurst, 0.7);
+  EXPECT_EQ(s.terrain.slope_deg, Eigen::Vector2d::Zero());
+  EXPECT_FALSE(s.terrain.sinusoid);
+  EXPECT_TRUE(s.terrain.steps.empty());
+  EXPECT_FALSE(s.terrain.rocks);
+  EXPECT_FALSE(s.terrain.craters);
+
+  const Scenario m = parseScenario(kMinimal + "map: {}\n", kFile);
+  ASSERT_TRUE(m.map);
+  EXPECT_EQ(m.map->cell_m, 0.10);
+  EXPECT_EQ(m.map->x_m, Eigen::Vector2d(-5, 5));
+  EXPECT_EQ(m.map->y_m, Eigen::Vector2d(-3, 8));
+  EXPECT_EQ(m.map->epsilon_rad, 1.0e-5);
+  EXPECT_EQ(m.map->shadows, "gnc");
+  EXPECT_EQ(m.map->baseline, "cartesian");
+
+  const Scenario r = parseScenario(
+      "name: t\nterrain: {kind: mars, rocks: {}, craters: {}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+      kFile);
+  ASSERT_TRUE(r.terrain.rocks && r.terrain.craters);
+  EXPECT_EQ(r.terrain.rocks->abundance_k, 0.10);
+  EXPECT_EQ(r.terrain.rocks->min_diameter_m, 0.1);
+  EXPECT_EQ(r.terrain.rocks->max_diameter_m, 1.0);
+  EXPECT_EQ(r.terrain.craters->count, 4);
+  EXPECT_EQ(r.terrain.craters->min_diameter_m, 1.0);
+  EXPECT_EQ(r.terrain.craters->max_diameter_m, 5.0);
+  EXPECT_EQ(r.terrain.craters->sfd_exponent, 2.0);
+}
+
+// A kind that needs a section gets the default one, so the terrain builder never guesses and the
+// resolved file shows what is built.
+TEST(ScenarioDefaults, KindsFillInTheSectionTheyNeed) {
+  const Scenario mars =
+      parseScenario("name: t\nterrain: {kind: mars}\nviews: [{xyz_m: [0, 0, 1]}]\n", kFile);
+  ASSERT_TRUE(mars.terrain.rocks && mars.terrain.craters);
+  EXPECT_EQ(mars.terrain.rocks->abundance_k, 0.10);
+  EXPECT_EQ(mars.terrain.craters->count, 4);
+  const Scenario fractal =
+      parseScenario("name: t\nterrain: {kind: fractal}\nviews: [{xyz_m: [0, 0, 1]}]\n", kFile);
+  EXPECT_FALSE(fractal.terrain.rocks || fractal.terrain.craters);
+  expectRoundTrip(mars);
+  const Scenario sin =
+      parseScenario("name: t\nterrain: {kind: sinusoid}\nviews: [{xyz_m: [0, 0, 1]}]\n", kFile);
+  ASSERT_TRUE(sin.terrain.sinusoid);
+  EXPECT_EQ(sin.terrain.sinusoid->amplitude_m, 0.05);
+  EXPECT_EQ(sin.terrain.sinusoid->wavelength_m, 0.4);
+  const Scenario steps =
+      parseScenario("name: t\nterrain: {kind: steps}\nviews: [{xyz_m: [0, 0, 1]}]\n", kFile);
+  ASSERT_EQ(steps.terrain.steps.size(), 1u);
+  EXPECT_EQ(steps.terrain.steps[0].x_m, 2.0);
+  EXPECT_EQ(steps.terrain.steps[0].height_m, 0.4);
+  expectRoundTrip(sin);
+  expectRoundTrip(steps);
+}
+
+TEST(ScenarioDefaults, ResolvedYamlWritesEveryKey) {
+  const std::string y = resolvedYaml(parseScenario(kMinimal + "map: {}\n", kFile));
+  for (const char* key : {"name: \"t\"",
+                          "description: \"\"",
+                          "seed: 0",
+                          "kind: plane",
+                          "size_m: [20, 20]",
+                          "cell_m: 0.05",
+                          "relief_m: 0.6",
+                          "hurst: 0.7",
+                          "slope_deg: [0, 0]",
+                          "steps: []",
+                          "rows: 64",
+                          "cols: 256",
+                          "fov_deg: [30, 80]",
+                          "noise_k: 0.0003",
+                          "quantization_m: 0.0762",
+                          "ambiguity_m: 19.5",
+                          "mixed_pixels: true",
+                          "max_range_m: 40",
+                          "beam_divergence_deg: 0",
+                          "dropout: 0",
+                          "- {xyz_m: [0, 0, 1], rpy_deg: [0, 0, 0]}",
+                          "cell_m: 0.1",
+                          "region: {x_m: [-5, 5], y_m: [-3, 8]}",
+                          "epsilon_rad: 1e-05",
+                          "shadows: gnc",
+                          "baseline: cartesian"}) {
+    EXPECT_NE(y.find(key), std::string::npos) << key << "\n" << y;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Round trips of values
+
+// Degrees become radians once (deg·π/180); the resolved file must write degree text that gives
+// the very same radians back, and the text the user wrote when it was short.
+TEST(ScenarioRoundTrip, DegreesReadBackBitForBit) {
+  std::mt19937_64 rng(42);
+  std::uniform_real_distribution<double> angle(-360.0, 360.0), fov(1e-3, 179.999);
+  std::uniform_int_distribution<int> tenths(-3600, 3600);
+  for (int i = 0; i < 2000; ++i) {
+    char text[64];
+    if (i % 2 == 0) {
+      std::snprintf(text, sizeof text, "%.17g", angle(rng));
+    } else {
+      std::snprintf(text, sizeof text, "%g", tenths(rng) / 10.0);
+    }
+    const std::string yaml = "name: t\nterrain: {kind: plane}\nsensor: {fov_deg: [" +
+                             std::to_string(fov(rng)) + ", 80], beam_divergence_deg: 0.3}\n" +
+                             "views: [{xyz_m: [0, 0, 1], rpy_deg: [0, " + text + ", -0]}]\n";
+    const Scenario s = parseScenario(yaml, kFile);
+    expectRoundTrip(s);
+    if (i % 2 == 1) {
+      EXPECT_NE(resolvedYaml(s).find(std::string("rpy_deg: [0, ") + text + ", -0]"),
+                std::string::npos)
+          << text;
+    }
+    if (HasFailure()) break;
+  }
+}
+
+// Radians set in code (not from a degree in a file) have no exact degree text in general; the
+// resolved file then writes the nearest, which reads back within one ulp.
+TEST(ScenarioRoundTrip, RadiansSetInCodeReadBackWithinOneUlp) {
+  Scenario s = parseScenario(kMinimal, kFile);
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> angle(-6.0, 6.0);
+  for (int i = 0; i < 1000; ++i) {
+    s.views[0].rpy_rad = {angle(rng), angle(rng), angle(rng)};
+    const Scenario back = parseScenario(resolvedYaml(s), kFile);
+    for (int k = 0; k < 3; ++k) {
+      const double a = s.views[0].rpy_rad[k], b = back.views[0].rpy_rad[k];
+      EXPECT_LE(std::abs(a - b), std::nextafter(std::abs(a), 10.0) - std::abs(a)) << a;
+    }
+  }
+}
+
+TEST(ScenarioRoundTrip, NumbersReadBackBitForBit) {
+  std::mt19937_64 rng(3);
+  Scenario s = parseScenario(kMinimal + "map: {}\n", kFile);
+  for (int i = 0; i < 500; ++i) {
+    // Any finite double survives, including subnormals and -0.
+    const std::uint64_t raw = rng();
+    double any = std::bit_cast<double>(raw);
+    if (!std::isfinite(any)) any = -0.0;
+    s.views[0].xyz_m = {any, std::ldexp(double(rng() % 1000), -1070), -0.0};
+    s.seed = rng();
+    s.terrain.cell_m = std::uniform_real_distribution<double>(0.01, 1.0)(rng);
+    s.map->epsilon_rad = std::uniform_real_distribution<double>(1e-12, 1e-3)(rng);
+    expectRoundTrip(s);
+    if (HasFailure()) break;
+  }
+}
+
+TEST(ScenarioRoundTrip, StringsSurviveQuoting) {
+  Scenario s = parseScenario(kMinimal, kFile);
+  for (const std::string& text : std::vector<std::string>{
+           "plain", "with: colon # and hash", "quote \" backslash \\ tab \t newline \n end", "null",
+           "true", "- dash", "Mars ~ ünïcödé °", std::string("nul\0byte", 8), "\x7f\x01"}) {
+    s.description = text;
+    expectRoundTrip(s);
+  }
+  for (const char* name : {"null", "true", "123", "-", "a-b_c"}) {
+    s.name = name;
+    expectRoundTrip(s);
+  }
+}
+
+TEST(ScenarioRoundTrip, MjcfPathIsResolvedAgainstTheScenarioDirectory) {
+  const TempDir dir;
+  fs::create_directories(dir.path / "worlds");
+  std::ofstream(dir.path / "worlds" / "lab.xml") << "<mujoco/>\n";
+  const fs::path file = dir.path / "lab.yaml";
+  std::ofstream(file) << "name: lab\nterrain: {kind: mjcf, mjcf: worlds/../worlds/lab.xml}\n"
+                         "views: [{xyz_m: [0, 0, 1]}]\n";
+  const Scenario s = loadScenario(file);
+  EXPECT_EQ(fs::path(s.terrain.mjcf),
+            (fs::absolute(dir.path) / "worlds" / "lab.xml").lexically_normal());
+  expectRoundTrip(s);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Errors: one line, "<file>: <key path>: <what is wrong>"
+
+TEST(ScenarioErrors, MissingFile) {
+  const fs::path missing = "/nonexistent_ambler_dir/x.yaml";
+  try {
+    loadScenario(missing);
+    FAIL() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()), missing.string() + ": cannot open file");
+  }
+  const TempDir dir;
+  try {
+    loadScenario(dir.path);
+    FAIL() << "no error";
+  } catch (const ScenarioError& e) {
+    EXPECT_EQ(std::string(e.what()), dir.path.string() + ": cannot open file");
+  }
+}
+
+TEST(ScenarioErrors, YamlSyntaxNamesTheLine) {
+  expectError("name: t\nterrain: {kind: plane\nviews: []\n", "line 3, column 6",
+              "YAML syntax error: end of map flow not found");
+  expectError("name: t\n  bad: indent\n", "line 2, column 6",
+              "YAML syntax error: illegal map value");
+}
+
+TEST(ScenarioErrors, UnknownKeysEverywhere) {
+  expectError("name: t\nterrain: {kind: plane, relif_m: 1}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.relif_m", "unknown key (did you mean relief_m?)");
+  expectError(kMinimal + "sensor: {max_range: 30}\n", "sensor.max_range",
+              "unknown key (did you mean max_range_m?)");
+  expectError("name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1], rpy_rad: [0, 0, 0]}]\n",
+              "views[0].rpy_rad", "unknown key (did you mean rpy_deg?)");
+  expectError(kMinimal + "map: {region: {x_m: [0, 1], z_m: [0, 1]}}\n", "map.region.z_m",
+              "unknown key");
+  expectError(kMinimal + "colour: red\n", "colour",
+              "unknown key (allowed: name, description, seed, terrain, sensor, views, map)");
+  expectError(
+      "name: t\nterrain: {kind: plane, rocks: {abundance: 0.1}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+      "terrain.rocks.abundance", "did you mean abundance_k?");
+  expectError(
+      "name: t\nterrain: {kind: steps, steps: [{x_m: 1, h: 2}]}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+      "terrain.steps[0].h", "unknown key");
+}
+
+TEST(ScenarioErrors, MissingRequiredKeys) {
+  expectError("name: t\nterrain: {size_m: [1, 1]}\nviews: [{xyz_m: [0, 0, 1]}]\n", "terrain.kind",
+              "missing required key");
+  expectError("terrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}]\n", "name",
+              "missing required key");
+  expectError("name: t\nviews: [{xyz_m: [0, 0, 1]}]\n", "terrain", "missing required key");
+  expectError("name: t\nterrain: {kind: plane}\n", "views", "missing required key");
+  expectError(
+      "name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}, {rpy_deg: [0, 0, 0]}]\n",
+      "views[1].xyz_m", "missing required key");
+  expectError("name: t\nterrain: {kind: mjcf}\nviews: [{xyz_m: [0, 0, 1]}]\n", "terrain.mjcf",
+              "missing required key");
+}
+
+TEST(ScenarioErrors, WrongTypes) {
+  expectError(kMinimal + "sensor: {mixed_pixels: maybe}\n", "sensor.mixed_pixels",
+              "expected true or false, got 'maybe'");
+  expectError(kMinimal + "sensor: {noise_k: low}\n", "sensor.noise_k",
+              "expected a number >= 0, got 'low'");
+  expectError(kMinimal + "sensor: {max_range_m: \"40\"}\n", "sensor.max_range_m",
+              "expected a number > 0, got the string '40'");
+  expectError(kMinimal + "sensor: [64, 256]\n", "sensor", "expected a mapping, got a list of 2");
+  expectError(kMinimal + "sensor:\n", "sensor", "expected a mapping, got nothing");
+  expectError(kMinimal + "map: {shadows: yes}\n", "map.shadows",
+              "expected one of gnc, none, got 'yes'");
+  expectError("name: t\nterrain: {kind: fractl}\nviews: [{xyz_m: [0, 0, 1]}]\n", "terrain.kind",
+              "expected one of plane, fractal, sinusoid, steps, mars, mjcf, got 'fractl' (did you "
+              "mean fractal?)");
+  expectError("name: t\nterrain: {kind: plane}\nviews: {xyz_m: [0, 0, 1]}\n", "views",
+              "expected a non-empty list of views, got a mapping");
+  expectError("name: [t]\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}]\n", "name",
+              "expected a string, got a list of 1");
+}
+
+TEST(ScenarioErrors, IntegersMustBeIntegers) {
+  expectError(kMinimal + "sensor: {rows: 2.5}\n", "sensor.rows",
+              "expected an integer in [1, 4096], got 2.5");
+  expectError(
+      "name: t\nterrain: {kind: mars, craters: {count: 1e2}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+      "terrain.craters.count", "expected an integer in [0, 1000], got 1e2");
+  expectError(kMinimal + "seed: -1\n", "seed", "expected an integer in [0, 2^64 - 1], got -1");
+  expectError(kMinimal + "seed: 7.0\n", "seed", "expected an integer");
+  EXPECT_EQ(parseScenario(kMinimal + "seed: 18446744073709551615\n", kFile).seed,
+            18446744073709551615u);
+}
+
+TEST(ScenarioErrors, OutOfRange) {
+  EXPECT_EQ(errorOf(kMinimal + "sensor: {rows: 0}\n"),
+            "scenarios/x.yaml: sensor.rows: expected an integer in [1, 4096], got 0");
+  expectError(kMinimal + "sensor: {cols: 16385}\n", "sensor.cols",
+              "expected an integer in [1, 16384]");
+  EXPECT_EQ(parseScenario(kMinimal + "sensor: {rows: 4096, cols: 16384}\n", kFile).sensor.cols,
+            16384);
+  expectError(kMinimal + "sensor: {fov_deg: [30, 180]}\n", "sensor.fov_deg[1]",
+              "expected a number in (0, 180), got 180");
+  expectError(kMinimal + "sensor: {dropout: 1}\n", "sensor.dropout",
+              "expected a number in [0, 1), got 1");
+  expectError(kMinimal + "sensor: {beam_divergence_deg: -0.1}\n", "sensor.beam_divergence_deg",
+              "expected a number in [0, 180)");
+  expectError("name: t\nterrain: {kind: plane, size_m: [20, 501]}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.size_m[1]", "expected a number in (0, 500], got 501");
+  expectError("name: t\nterrain: {kind: plane, cell_m: 0}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.cell_m", "expected a number in (0, 1], got 0");
+  expectError("name: t\nterrain: {kind: fractal, hurst: 1}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.hurst", "expected a number in (0, 1), got 1");
+  expectError("name: t\nterrain: {kind: plane, slope_deg: [0, -60]}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.slope_deg[1]", "expected a number in (-60, 60), got -60");
+  expectError(
+      "name: t\nterrain: {kind: mars, rocks: {abundance_k: 0.6}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+      "terrain.rocks.abundance_k", "expected a number in (0, 0.5], got 0.6");
+  expectError(
+      "name: t\nterrain: {kind: mars, craters: {count: 1001}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+      "terrain.craters.count", "expected an integer in [0, 1000], got 1001");
+  expectError(
+      "name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1], rpy_deg: [0, 0, 361]}]\n",
+      "views[0].rpy_deg[2]", "expected a number in [-360, 360], got 361");
+  expectError(kMinimal + "map: {epsilon_rad: 0}\n", "map.epsilon_rad",
+              "expected a number > 0, got 0");
+  expectError("name: T-1\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}]\n", "name",
+              "expected lowercase letters, digits, '_' and '-' only, got 'T-1'");
+}
+
+TEST(ScenarioErrors, NumbersMustBeFinite) {
+  expectError("name: t\nterrain: {kind: plane, cell_m: .nan}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.cell_m", "expected a finite number in (0, 1], got .nan");
+  expectError("name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, -.inf, 1]}]\n",
+              "views[0].xyz_m[1]", "expected a finite number, got -.inf");
+  expectError(kMinimal + "sensor: {max_range_m: 1e999}\n", "sensor.max_range_m",
+              "expected a number > 0, got 1e999, beyond the range of a double");
+  expectError(kMinimal + "sensor: {noise_k: nan}\n", "sensor.noise_k", "expected a finite number");
+  expectError(kMinimal + "sensor: {noise_k: 1e-400}\n", "sensor.noise_k",
+              "expected a number >= 0, got 1e-400, beyond the range of a double");
+}
+
+TEST(ScenarioErrors, ListsHaveTheirExactLength) {
+  expectError("name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}, {xyz_m: [0, 1]}]\n",
+              "views[1].xyz_m", "expected a list of 3 numbers, got a list of 2");
+  expectError("name: t\nterrain: {kind: plane, size_m: 20}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.size_m", "expected a list of 2 numbers, got 20");
+  expectError("name: t\nterrain: {kind: plane}\nviews: []\n", "views",
+              "expected a non-empty list of views, got a list of 0");
+  expectError("name: t\nterrain: {kind: steps, steps: []}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.steps", "expected a non-empty list of steps");
+}
+
+TEST(ScenarioErrors, RelationsBetweenKeys) {
+  expectError(
+      "name: t\nterrain: {kind: mars, rocks: {min_diameter_m: 0.5, max_diameter_m: 0.5}}\n"
+      "views: [{xyz_m: [0, 0, 1]}]\n",
+      "terrain.rocks.max_diameter_m", "expected a number > min_diameter_m (0.5), got 0.5");
+  expectError(
+      "name: t\nterrain: {kind: mars, craters: {min_diameter_m: 6}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+      "terrain.craters.max_diameter_m", "got 5 (the default)");
+  expectError(kMinimal + "map: {region: {x_m: [5, -5]}}\n", "map.region.x_m",
+              "expected [lo, hi] with lo < hi, got [5, -5]");
+  expectError(
+      "name: t\nterrain: {kind: plane, size_m: [500, 500], cell_m: 0.05}\n"
+      "views: [{xyz_m: [0, 0, 1]}]\n",
+      "terrain.cell_m", "expected at most 25000000 grid points, got 10001 x 10001");
+  expectError(
+      "name: t\nterrain: {kind: plane, size_m: [0.4, 20], cell_m: 1}\n"
+      "views: [{xyz_m: [0, 0, 1]}]\n",
+      "terrain.cell_m",
+      "expected at most twice the smaller side of size_m (0.8) for two samples per side, "
+      "got 1");
+  expectError("name: t\nterrain: {kind: mars, size_m: [1.5, 20]}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.rocks.max_diameter_m",
+              "expected at most half the smaller side of size_m (0.75), got 1 (the default)");
+  expectError(kMinimal + "map: {cell_m: 0.001}\n", "map.cell_m",
+              "expected at most 25000000 grid points");
+  expectError("name: t\nterrain: {kind: plane, mjcf: w.xml}\nviews: [{xyz_m: [0, 0, 1]}]\n",
+              "terrain.mjcf", "only allowed with kind: mjcf");
+}
+
+TEST(ScenarioErrors, MjcfFileMustExist) {
+  const std::string message = errorOf(
+      "name: t\nterrain: {kind: mjcf, mjcf: worlds/none.xml}\nviews: [{xyz_m: [0, 0, 1]}]\n");
+  EXPECT_EQ(message.rfind(kFile + ": terrain.mjcf: cannot find the MJCF file 'worlds/none.xml'", 0),
+            0u)
+      << message;
+  EXPECT_NE(message.find((fs::absolute("scenarios") / "worlds" / "none.xml").string()),
+            std::string::npos)
+      << message;
+}
+
+TEST(ScenarioErrors, DocumentShape) {
+  expectError(kMinimal + "seed: 1\nseed: 2\n", "seed", "duplicate key");
+  EXPECT_EQ(errorOf(""), kFile + ": expected a mapping of scenario keys, got nothing");
+  EXPECT_EQ(errorOf("# only a comment\n"),
+            kFile + ": expected a mapping of scenario keys, got nothing");
+  EXPECT_EQ(errorOf(kMinimal + "---\n" + kMinimal), kFile + ": expected one YAML document, got 2");
+  EXPECT_EQ(errorOf("- a\n- b\n"),
+            kFile + ": expected a mapping of scenario keys, got a list of 2");
+  expectError(kMinimal + "[a]: 1\n", "", "expected plain names as keys");
+}
+
+}  // namespace
+}  // namespace ambler::eval
