@@ -122,11 +122,12 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
   long mj_rays = 0;
   {
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-    emu_s = timeMedian(reps, [&] { scanner_small.scan(T, 1); });
+    sim::Scan out;  // reused, as a sweep would
+    emu_s = timeMedian(reps, [&] { scanner_small.scan(T, 1, out); });
     sim::ErimConfig mixed = small;
     mixed.mixed_pixels = true;
     const sim::ErimScanner scanner_mixed(scene, mixed);
-    emu_mixed_s = timeMedian(reps, [&] { scanner_mixed.scan(T, 1); });
+    emu_mixed_s = timeMedian(reps, [&] { scanner_mixed.scan(T, 1, out); });
     // mj_ray walks every cell of the hfield the ray's bounding box covers, so a full 64×256 loop
     // takes long: time every `stride`-th pixel of the same scan (the same mix of rays).
     const auto img = perception::RangeImage::blank(small.rows, small.cols, small.fov_v_rad, small.fov_h_rad);
@@ -150,10 +151,11 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
   const auto img_large = perception::RangeImage::blank(large.rows, large.cols, large.fov_v_rad, large.fov_h_rad);
   std::vector<float> t_bare;
   std::vector<double> emu_large_s, bare_s;
+  sim::Scan s;  // reused, like the bare cast's output vector
   // Interleave the two so machine noise hits both alike.
   for (int i = 0; i <= reps; ++i) {
     const auto t0 = std::chrono::steady_clock::now();
-    const sim::Scan s = scanner_large.scan(T, 1);
+    scanner_large.scan(T, 1, s);
     const auto t1 = std::chrono::steady_clock::now();
     bareEmbreeCast(scene.embreeScene(), img_large, T, t_bare);
     const auto t2 = std::chrono::steady_clock::now();

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <array>
+#include <cstdint>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -63,16 +64,39 @@ AngleTable angleTable(const perception::RangeImage& img, double dphi, double dth
 
 }  // namespace
 
-double measureRange(double rho, double normal, const ErimConfig& cfg) {
-  double m = rho + cfg.noise_k * rho * rho * normal;
-  if (m < 0.0) m = 0.0;
-  if (cfg.ambiguity_m > 0.0) m = std::fmod(m, cfg.ambiguity_m);
-  if (cfg.quantization_m > 0.0) {
-    m = cfg.quantization_m * std::nearbyint(m / cfg.quantization_m);
-    // The top count rounds onto the interval's end, which is range 0 again.
-    if (cfg.ambiguity_m > 0.0 && m >= cfg.ambiguity_m) m = 0.0;
+namespace {
+
+// The measurement model with its reciprocals precomputed: a division costs more than the rest.
+struct Measurement {
+  double k, ambiguity, inv_ambiguity, q, inv_q;
+  explicit Measurement(const ErimConfig& c)
+      : k(c.noise_k),
+        ambiguity(c.ambiguity_m),
+        inv_ambiguity(c.ambiguity_m > 0 ? 1.0 / c.ambiguity_m : 0.0),
+        q(c.quantization_m),
+        inv_q(c.quantization_m > 0 ? 1.0 / c.quantization_m : 0.0) {}
+
+  double operator()(double rho, double normal) const {
+    double m = rho + k * rho * rho * normal;
+    m = m > 0.0 ? m : 0.0;
+    // m >= 0 here, so truncation is floor, and +0.5 then truncation rounds half up: no libm calls.
+    if (ambiguity > 0.0) {
+      m -= ambiguity * double(std::int64_t(m * inv_ambiguity));
+      m = m >= ambiguity ? m - ambiguity : m;  // the reciprocal can leave one interval over
+    }
+    if (q > 0.0) {
+      m = q * double(std::int64_t(m * inv_q + 0.5));
+      // The top count rounds onto the interval's end, which is range 0 again.
+      m = ambiguity > 0.0 && m >= ambiguity ? 0.0 : m;
+    }
+    return m;
   }
-  return m;
+};
+
+}  // namespace
+
+double measureRange(double rho, double normal, const ErimConfig& cfg) {
+  return Measurement(cfg)(rho, normal);
 }
 
 ErimScanner::ErimScanner(const RayScene& scene, ErimConfig config)
@@ -87,19 +111,41 @@ ErimScanner::ErimScanner(const RayScene& scene, ErimConfig config)
   requireConfig(config.dropout >= 0 && config.dropout < 1, "dropout must be in [0, 1)");
 }
 
+Eigen::Vector3d pixelDirection(const perception::RangeImage& image, int r, int c) {
+  const double ct = std::cos(image.theta[c]);
+  return image.T_WS.linear() *
+         Eigen::Vector3d(std::sin(image.theta[c]), std::cos(image.phi[r]) * ct, std::sin(image.phi[r]) * ct);
+}
+
+std::optional<Eigen::Vector3d> Scan::trueHit(int r, int c) const {
+  const float t = true_range(r, c);
+  if (!std::isfinite(t)) return std::nullopt;
+  return image.T_WS.translation() + double(t) * pixelDirection(image, r, c);
+}
+
 double ErimScanner::beamDivergence() const {
   if (config_.beam_divergence_rad > 0) return config_.beam_divergence_rad;
   return std::max(config_.fov_v_rad / config_.rows, config_.fov_h_rad / config_.cols);
 }
 
 Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const {
-  const int rows = config_.rows, cols = config_.cols;
   Scan out;
-  out.image = perception::RangeImage::blank(rows, cols, config_.fov_v_rad, config_.fov_h_rad);
+  scan(T_WS, seed, out);
+  return out;
+}
+
+void ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& out) const {
+  const int rows = config_.rows, cols = config_.cols;
+  // Every pixel of every output is written below, so reused buffers need no clearing.
+  if (out.image.rows() != rows || out.image.cols() != cols) {
+    out.image = perception::RangeImage::blank(rows, cols, config_.fov_v_rad, config_.fov_h_rad);
+    out.true_range.resize(rows, cols);
+    out.geom.resize(rows, cols);
+  } else {
+    for (int r = 0; r < rows; ++r) out.image.phi[r] = perception::rowAngle(r, rows, config_.fov_v_rad);
+    for (int c = 0; c < cols; ++c) out.image.theta[c] = perception::colAngle(c, cols, config_.fov_h_rad);
+  }
   out.image.T_WS = T_WS;
-  out.true_range = perception::RangeMatrix::Constant(rows, cols, kNaN);
-  out.true_hit.setConstant(std::size_t(rows) * cols, 3, kNaN);
-  out.geom.setConstant(rows, cols, -1);
 
   const Footprint fp = footprint();
   const int samples = config_.mixed_pixels ? kFootprintSamples : 1;
@@ -110,6 +156,8 @@ Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const 
 
   const Eigen::Matrix3d R = T_WS.linear();
   const Eigen::Vector3d o = T_WS.translation();
+  const Measurement measure(config_);
+  const std::uint64_t stream = terrains::mix64(seed);
   const int tile_rows = (rows + 3) / 4, tile_cols = (cols + 3) / 4;
 
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tile_rows, 0, tile_cols), [&](const auto& range) {
@@ -148,11 +196,9 @@ Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const 
           const int r = tr * 4 + i / 4, c = tc * 4 + i % 4;
           const std::size_t pixel = std::size_t(r) * cols + c;
           const float t0 = hits[0].t[i];
-          if (t0 < kInf) {
-            out.true_range(r, c) = t0;
-            out.geom(r, c) = hits[0].geom[i];
-            out.true_hit.row(pixel) = (o + double(t0) * central[i]).cast<float>().transpose();
-          }
+          out.true_range(r, c) = t0 < kInf ? t0 : kNaN;
+          out.geom(r, c) = hits[0].geom[i];
+          out.image.range(r, c) = kNaN;  // until a return is established below
           // The reported range: the power-weighted mean over the footprint (returned power of an
           // extended target falls as 1/ρ²). Fewer than half the footprint returning: no return.
           double rho = std::numeric_limits<double>::quiet_NaN();
@@ -170,15 +216,14 @@ Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const 
             if (hit_w >= 0.5) rho = sum_wt / sum_w;
           }
           if (!(rho <= config_.max_range_m)) continue;
-          const std::uint64_t key = terrains::streamKey(seed, pixel);
-          if (config_.dropout > 0 && terrains::toUnit(terrains::mix64(key ^ 0x5bd1e995ull)) < config_.dropout)
-            continue;
+          // SplitMix64's own stream: one mix per pixel gives independent draws.
+          const std::uint64_t key = stream + pixel * 0x9E3779B97F4A7C15ull;
+          if (config_.dropout > 0 && terrains::toUnit(terrains::mix64(~key)) < config_.dropout) continue;
           const double normal = config_.noise_k > 0 ? terrains::normalFromKey(key) : 0.0;
-          out.image.range(r, c) = float(measureRange(rho, normal, config_));
+          out.image.range(r, c) = float(measure(rho, normal));
         }
       }
   });
-  return out;
 }
 
 }  // namespace ambler::sim

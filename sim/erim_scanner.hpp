@@ -4,6 +4,7 @@
 // dropouts and mixed pixels at depth discontinuities — each switchable.
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 
 #include "perception/range_image.hpp"
 
@@ -32,8 +33,12 @@ inline constexpr int kFootprintSamples = 7;
 struct Scan {
   perception::RangeImage image;   // what the sensor reports
   perception::RangeMatrix true_range;  // the central ray's true range; NaN if it hit nothing
-  Eigen::Matrix<float, Eigen::Dynamic, 3, Eigen::RowMajor> true_hit;  // world, row-major pixels
   Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> geom;  // -1: no hit
+
+  // The true hit of pixel (r, c)'s central ray in the world frame (nullopt if it hit nothing):
+  // the ray the scanner cast, to the refined true range. Derived, not stored, to keep the
+  // scanner's memory traffic to what it measures.
+  std::optional<Eigen::Vector3d> trueHit(int r, int c) const;
 };
 
 class ErimScanner {
@@ -44,6 +49,8 @@ class ErimScanner {
   // One range image from sensor pose T_WS. All random draws derive from `seed` and the pixel
   // index, so the result does not depend on the thread schedule. Parallel over all cores.
   Scan scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const;
+  // The same into `out`, reusing its memory when its size matches (for sweeps and benchmarks).
+  void scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& out) const;
 
   const ErimConfig& config() const { return config_; }
   // The footprint's full angle actually used (resolves the 0 default).
@@ -53,6 +60,9 @@ class ErimScanner {
   const RayScene& scene_;
   ErimConfig config_;
 };
+
+// The direction, in the world, of pixel (r, c)'s central ray: exactly what the scanner casts.
+Eigen::Vector3d pixelDirection(const perception::RangeImage& image, int r, int c);
 
 // The measurement model applied to one true range (no geometry): noise, wrap, quantisation.
 // `normal` is a standard normal draw. Returns the reported range (never negative).

@@ -46,10 +46,8 @@ class Rng {
 };
 
 // Standard normal drawn from a counter (stateless): the same key always gives the same value.
-inline double normalFromKey(std::uint64_t key) {
-  const double u1 = 1.0 - toUnit(mix64(key));
-  const double u2 = toUnit(mix64(key ^ 0xA0761D6478BD642Full));
-  return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
-}
+// An exact ziggurat sampler (Marsaglia & Tsang's 128 layers in Doornik's form): one 64-bit draw
+// and no transcendental function in 98.8 % of calls, which matters at millions of pixels a scan.
+double normalFromKey(std::uint64_t key);
 
 }  // namespace ambler::terrains
