@@ -76,16 +76,25 @@ struct Measurement {
         q(c.quantization_m),
         inv_q(c.quantization_m > 0 ? 1.0 / c.quantization_m : 0.0) {}
 
+  // Round to nearest (ties to even) for 0 <= x < 2^51 with two additions: no libm call and no
+  // integer conversion on the critical path. (IEEE semantics: the project never builds with
+  // -ffast-math, which could fold this to x.)
+  static double roundNearest(double x) {
+    constexpr double kMagic = 0x1.8p52;
+    return (x + kMagic) - kMagic;
+  }
+
   double operator()(double rho, double normal) const {
     double m = rho + k * rho * rho * normal;
     m = m > 0.0 ? m : 0.0;
-    // m >= 0 here, so truncation is floor, and +0.5 then truncation rounds half up: no libm calls.
     if (ambiguity > 0.0) {
-      m -= ambiguity * double(std::int64_t(m * inv_ambiguity));
-      m = m >= ambiguity ? m - ambiguity : m;  // the reciprocal can leave one interval over
+      double n = roundNearest(m * inv_ambiguity);
+      n = n * ambiguity > m ? n - 1.0 : n;  // floor
+      m -= n * ambiguity;
+      m = m >= ambiguity ? m - ambiguity : (m < 0.0 ? m + ambiguity : m);
     }
     if (q > 0.0) {
-      m = q * double(std::int64_t(m * inv_q + 0.5));
+      m = q * roundNearest(m * inv_q);
       // The top count rounds onto the interval's end, which is range 0 again.
       m = ambiguity > 0.0 && m >= ambiguity ? 0.0 : m;
     }
@@ -188,23 +197,17 @@ void ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& 
           }
           scene_.intersect16(rays, hits[k]);
         }
+        // The rest runs lane by lane in passes, so the 16 pixels' long dependency chains
+        // (refinement, noise draw, measurement) overlap instead of queueing.
+        alignas(64) double rho[16], normal[16];
         for (int i = 0; i < 16; ++i)
           if (rays.valid[i] && hits[0].geom[i] >= 0)
             hits[0].t[i] = float(scene_.exactDistance(hits[0].geom[i], hits[0].prim[i], o, central[i], hits[0].t[i]));
         for (int i = 0; i < 16; ++i) {
-          if (!rays.valid[i]) continue;
-          const int r = tr * 4 + i / 4, c = tc * 4 + i % 4;
-          const std::size_t pixel = std::size_t(r) * cols + c;
-          const float t0 = hits[0].t[i];
-          out.true_range(r, c) = t0 < kInf ? t0 : kNaN;
-          out.geom(r, c) = hits[0].geom[i];
-          out.image.range(r, c) = kNaN;  // until a return is established below
           // The reported range: the power-weighted mean over the footprint (returned power of an
           // extended target falls as 1/ρ²). Fewer than half the footprint returning: no return.
-          double rho = std::numeric_limits<double>::quiet_NaN();
-          if (samples == 1) {
-            if (t0 < kInf) rho = t0;
-          } else {
+          double value = hits[0].t[i];
+          if (samples > 1) {
             double hit_w = 0, sum_w = 0, sum_wt = 0;
             for (int k = 0; k < samples; ++k) {
               const double t = hits[k].t[i];
@@ -213,14 +216,24 @@ void ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& 
               sum_w += fp.w[k] / (t * t);
               sum_wt += fp.w[k] / t;
             }
-            if (hit_w >= 0.5) rho = sum_wt / sum_w;
+            value = hit_w >= 0.5 ? sum_wt / sum_w : kInf;
           }
-          if (!(rho <= config_.max_range_m)) continue;
+          rho[i] = value <= config_.max_range_m ? value : kNaN;
+        }
+        for (int i = 0; i < 16; ++i) {
           // SplitMix64's own stream: one mix per pixel gives independent draws.
+          const std::uint64_t pixel = std::uint64_t(tr * 4 + i / 4) * cols + tc * 4 + i % 4;
           const std::uint64_t key = stream + pixel * 0x9E3779B97F4A7C15ull;
-          if (config_.dropout > 0 && terrains::toUnit(terrains::mix64(~key)) < config_.dropout) continue;
-          const double normal = config_.noise_k > 0 ? terrains::normalFromKey(key) : 0.0;
-          out.image.range(r, c) = float(measure(rho, normal));
+          if (config_.dropout > 0 && terrains::toUnit(terrains::mix64(~key)) < config_.dropout) rho[i] = kNaN;
+          normal[i] = config_.noise_k > 0 && rho[i] == rho[i] ? terrains::normalFromKey(key) : 0.0;
+        }
+        for (int i = 0; i < 16; ++i) {
+          if (!rays.valid[i]) continue;
+          const int r = tr * 4 + i / 4, c = tc * 4 + i % 4;
+          const float t0 = hits[0].t[i];
+          out.true_range(r, c) = t0 < kInf ? t0 : kNaN;
+          out.geom(r, c) = hits[0].geom[i];
+          out.image.range(r, c) = rho[i] == rho[i] ? float(measure(rho[i], normal[i])) : kNaN;
         }
       }
   });
