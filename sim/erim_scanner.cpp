@@ -77,30 +77,59 @@ struct Measurement {
         inv_q(c.quantization_m > 0 ? 1.0 / c.quantization_m : 0.0) {}
 
   // Round to nearest (ties to even) for 0 <= x < 2^51 with two additions: no libm call and no
-  // integer conversion on the critical path. (IEEE semantics: the project never builds with
-  // -ffast-math, which could fold this to x.)
+  // integer conversion on the critical path. (IEEE semantics: the project builds with
+  // -ffp-contract=off and never -ffast-math, which could fold this to x.)
   static double roundNearest(double x) {
     constexpr double kMagic = 0x1.8p52;
     return (x + kMagic) - kMagic;
   }
 
+  // Straight-line (every branch a select), so a loop of it vectorises; with ambiguity or q zero
+  // the reciprocals are zero and the corresponding steps leave m unchanged.
   double operator()(double rho, double normal) const {
     double m = rho + k * rho * rho * normal;
     m = m > 0.0 ? m : 0.0;
-    if (ambiguity > 0.0) {
-      double n = roundNearest(m * inv_ambiguity);
-      n = n * ambiguity > m ? n - 1.0 : n;  // floor
-      m -= n * ambiguity;
-      m = m >= ambiguity ? m - ambiguity : (m < 0.0 ? m + ambiguity : m);
-    }
-    if (q > 0.0) {
-      m = q * roundNearest(m * inv_q);
-      // The top count rounds onto the interval's end, which is range 0 again.
-      m = ambiguity > 0.0 && m >= ambiguity ? 0.0 : m;
-    }
-    return m;
+    double n = roundNearest(m * inv_ambiguity);
+    n = n * ambiguity > m ? n - 1.0 : n;  // floor(m / ambiguity)
+    m -= n * ambiguity;
+    m = ambiguity > 0.0 && m >= ambiguity ? m - ambiguity : m;
+    m = m < 0.0 ? m + ambiguity : m;
+    const double counts = q * roundNearest(m * inv_q);
+    m = q > 0.0 ? counts : m;
+    // The top count rounds onto the interval's end, which is range 0 again.
+    return ambiguity > 0.0 && m >= ambiguity ? 0.0 : m;
   }
 };
+
+// Noise and measurement for the 16 pixels of a tile. rho is NaN where nothing returns.
+struct Tile16 {
+  const Measurement* measure;
+  const terrains::ZigguratTables* zig;
+  std::uint64_t stream;
+  bool noise;
+  const std::uint64_t* pixel;
+  const double* rho;
+  float* out;
+};
+
+// Three passes over the lanes, so the pixels' long dependency chains (hash, table lookup,
+// measurement) overlap instead of queueing behind one another.
+void noiseAndMeasure16(const Tile16& t) {
+  alignas(64) double normal[16];
+  bool slow[16];
+  for (int i = 0; i < 16; ++i) {
+    // SplitMix64's own stream: the pixel index picks the draw, independent of threads.
+    const std::uint64_t bits = terrains::mix64(t.stream + t.pixel[i] * 0x9E3779B97F4A7C15ull);
+    const std::uint64_t layer = bits & 127;
+    const double u = terrains::signedUnit52(bits);
+    slow[i] = t.noise && !(std::abs(u) < t.zig->ratio[layer]);
+    normal[i] = t.noise ? u * t.zig->x[layer] : 0.0;
+  }
+  for (int i = 0; i < 16; ++i)  // the ziggurat's rare edges and tail
+    if (slow[i]) normal[i] = terrains::normalFromKey(t.stream + t.pixel[i] * 0x9E3779B97F4A7C15ull);
+  for (int i = 0; i < 16; ++i)
+    t.out[i] = t.rho[i] == t.rho[i] ? float((*t.measure)(t.rho[i], normal[i])) : kNaN;
+}
 
 }  // namespace
 
@@ -167,51 +196,52 @@ void ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& 
   const Eigen::Vector3d o = T_WS.translation();
   const Measurement measure(config_);
   const std::uint64_t stream = terrains::mix64(seed);
+  const terrains::ZigguratTables& zig = terrains::zigguratTables();
   const int tile_rows = (rows + 3) / 4, tile_cols = (cols + 3) / 4;
 
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tile_rows, 0, tile_cols), [&](const auto& range) {
-    RayPacket16 rays;
-    std::array<HitPacket16, kFootprintSamples> hits;
-    std::array<Eigen::Vector3d, 16> central;  // the central rays in double, for exact distances
-    for (int i = 0; i < 16; ++i) {
-      rays.ox[i] = float(o.x());
-      rays.oy[i] = float(o.y());
-      rays.oz[i] = float(o.z());
-      rays.tnear[i] = 0.0f;
-    }
+    std::array<RayHitPacket16, kFootprintSamples> hits;
+    alignas(64) int valid[16];
+    alignas(64) double cx[16], cy[16], cz[16];  // the central rays in double, for exact distances
+    for (auto& p : hits)
+      for (int i = 0; i < 16; ++i) {
+        p.ox[i] = float(o.x());
+        p.oy[i] = float(o.y());
+        p.oz[i] = float(o.z());
+        p.tnear[i] = 0.0f;
+      }
     for (int tr = range.rows().begin(); tr != range.rows().end(); ++tr)
       for (int tc = range.cols().begin(); tc != range.cols().end(); ++tc) {
         for (int k = 0; k < samples; ++k) {
           const AngleTable& a = tables[k];
+          RayHitPacket16& p = hits[k];
           for (int i = 0; i < 16; ++i) {
             const int r = std::min(tr * 4 + i / 4, rows - 1), c = std::min(tc * 4 + i % 4, cols - 1);
-            rays.valid[i] = (tr * 4 + i / 4 < rows && tc * 4 + i % 4 < cols) ? -1 : 0;
+            valid[i] = (tr * 4 + i / 4 < rows && tc * 4 + i % 4 < cols) ? -1 : 0;
             const double ct = a.cos_theta[c];
             const Eigen::Vector3d d =
                 R * Eigen::Vector3d(a.sin_theta[c], a.cos_phi[r] * ct, a.sin_phi[r] * ct);
-            rays.dx[i] = float(d.x());
-            rays.dy[i] = float(d.y());
-            rays.dz[i] = float(d.z());
-            rays.tfar[i] = kInf;
-            if (k == 0) central[i] = d;
+            p.dx[i] = float(d.x());
+            p.dy[i] = float(d.y());
+            p.dz[i] = float(d.z());
+            p.tfar[i] = kInf;
+            if (k == 0) cx[i] = d.x(), cy[i] = d.y(), cz[i] = d.z();
           }
-          scene_.intersect16(rays, hits[k]);
+          scene_.intersect16(valid, p);
         }
         // The rest runs lane by lane in passes, so the 16 pixels' long dependency chains
         // (refinement, noise draw, measurement) overlap instead of queueing.
-        alignas(64) double rho[16], normal[16];
-        for (int i = 0; i < 16; ++i)
-          if (rays.valid[i] && hits[0].geom[i] >= 0)
-            hits[0].t[i] = float(scene_.exactDistance(hits[0].geom[i], hits[0].prim[i], o, central[i], hits[0].t[i]));
+        alignas(64) double rho[16];
+        scene_.refine16(valid, o, cx, cy, cz, hits[0]);
         for (int i = 0; i < 16; ++i) {
           // The reported range: the power-weighted mean over the footprint (returned power of an
           // extended target falls as 1/ρ²). Fewer than half the footprint returning: no return.
-          double value = hits[0].t[i];
+          double value = hits[0].hit(i) ? hits[0].tfar[i] : kInf;
           if (samples > 1) {
             double hit_w = 0, sum_w = 0, sum_wt = 0;
             for (int k = 0; k < samples; ++k) {
-              const double t = hits[k].t[i];
-              if (!(t < kInf)) continue;
+              if (!hits[k].hit(i)) continue;
+              const double t = hits[k].tfar[i];
               hit_w += fp.w[k];
               sum_w += fp.w[k] / (t * t);
               sum_wt += fp.w[k] / t;
@@ -220,20 +250,20 @@ void ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& 
           }
           rho[i] = value <= config_.max_range_m ? value : kNaN;
         }
+        alignas(64) std::uint64_t pixel[16];
+        for (int i = 0; i < 16; ++i) pixel[i] = std::uint64_t(tr * 4 + i / 4) * cols + tc * 4 + i % 4;
+        if (config_.dropout > 0)
+          for (int i = 0; i < 16; ++i)
+            if (terrains::toUnit(terrains::mix64(~(stream + pixel[i] * 0x9E3779B97F4A7C15ull))) < config_.dropout)
+              rho[i] = kNaN;
+        alignas(64) float reported[16];
+        noiseAndMeasure16({&measure, &zig, stream, config_.noise_k > 0, pixel, rho, reported});
         for (int i = 0; i < 16; ++i) {
-          // SplitMix64's own stream: one mix per pixel gives independent draws.
-          const std::uint64_t pixel = std::uint64_t(tr * 4 + i / 4) * cols + tc * 4 + i % 4;
-          const std::uint64_t key = stream + pixel * 0x9E3779B97F4A7C15ull;
-          if (config_.dropout > 0 && terrains::toUnit(terrains::mix64(~key)) < config_.dropout) rho[i] = kNaN;
-          normal[i] = config_.noise_k > 0 && rho[i] == rho[i] ? terrains::normalFromKey(key) : 0.0;
-        }
-        for (int i = 0; i < 16; ++i) {
-          if (!rays.valid[i]) continue;
+          if (!valid[i]) continue;
           const int r = tr * 4 + i / 4, c = tc * 4 + i % 4;
-          const float t0 = hits[0].t[i];
-          out.true_range(r, c) = t0 < kInf ? t0 : kNaN;
-          out.geom(r, c) = hits[0].geom[i];
-          out.image.range(r, c) = rho[i] == rho[i] ? float(measure(rho[i], normal[i])) : kNaN;
+          out.true_range(r, c) = hits[0].hit(i) ? hits[0].tfar[i] : kNaN;
+          out.geom(r, c) = int(hits[0].geom[i]);
+          out.image.range(r, c) = reported[i];
         }
       }
   });

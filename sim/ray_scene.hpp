@@ -15,18 +15,20 @@ namespace ambler::sim {
 
 class World;
 
-// 16 rays, structure of arrays, 64-byte aligned (the layout of a coherent packet).
-struct alignas(64) RayPacket16 {
-  float ox[16], oy[16], oz[16];
-  float dx[16], dy[16], dz[16];  // unit directions
-  float tnear[16], tfar[16];
-  int valid[16];                 // -1 cast, 0 skip
-};
+// 16 rays and their hits, structure of arrays, laid out exactly as Embree's RTCRayHit16 (checked
+// at compile time in ray_scene.cpp), so a packet goes to Embree without a copy.
+struct alignas(64) RayHitPacket16 {
+  static constexpr unsigned kMiss = 0xFFFFFFFFu;
+  // The rays: set origin, direction (unit), tnear and tfar before casting.
+  float ox[16], oy[16], oz[16], tnear[16];
+  float dx[16], dy[16], dz[16], time[16];
+  float tfar[16];  // in: the farthest distance to look; out: the distance of the hit
+  unsigned mask[16], id[16], flags[16];
+  // The hits: geom is the MuJoCo geom id (kMiss on a miss), prim the triangle within it.
+  float ng_x[16], ng_y[16], ng_z[16], u[16], v[16];
+  unsigned prim[16], geom[16], inst[16];
 
-struct alignas(64) HitPacket16 {
-  float t[16];        // distance along the ray (float32, as Embree found it); +inf on a miss
-  int geom[16];       // MuJoCo geom id; -1 on a miss
-  unsigned prim[16];  // triangle index within the geom (0 for primitives)
+  bool hit(int i) const { return geom[i] != kMiss; }
 };
 
 struct RayHit {
@@ -43,8 +45,8 @@ class RayScene {
   RayScene& operator=(RayScene&&) noexcept;
   ~RayScene();
 
-  // Casts one coherent packet in float32. Thread-safe.
-  void intersect16(const RayPacket16& rays, HitPacket16& hits) const;
+  // Casts one coherent packet in float32 (lanes with valid[i] == -1; 64-byte aligned). Thread-safe.
+  void intersect16(const int* valid, RayHitPacket16& packet) const;
 
   // The distance to a hit that intersect16 found, recomputed in double precision for the double
   // ray (o, d): the plane of the hit triangle, or the primitive's analytic surface. Embree works
@@ -52,6 +54,12 @@ class RayScene {
   // computation disagrees (a ray grazing an edge).
   double exactDistance(int geom, unsigned prim, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
                        double t) const;
+
+  // exactDistance for the hits of a whole packet at once (the scanner's hot path): refines
+  // packet.tfar in place; the rays share the origin `o` and have directions (dx, dy, dz)[i] in
+  // double. Lanes with valid[i] == 0 or no hit are left alone.
+  void refine16(const int* valid, const Eigen::Vector3d& o, const double* dx, const double* dy,
+                const double* dz, RayHitPacket16& packet) const;
 
   // One ray, refined to double precision; `dir` need not be unit (t is then in units of |dir|,
   // as mj_ray). Thread-safe.

@@ -47,12 +47,17 @@ double tail(std::uint64_t& key, bool negative) {
 
 }  // namespace
 
+const ZigguratTables& zigguratTables() {
+  static const ZigguratTables t{ziggurat().x.data(), ziggurat().ratio.data()};
+  return t;
+}
+
 double normalFromKey(std::uint64_t key) {
   const Ziggurat& z = ziggurat();
   for (;;) {
     const std::uint64_t bits = mix64(key);
     const int i = int(bits & (kLayers - 1));         // layer: the low 7 bits
-    const double u = 2.0 * toUnit(bits) - 1.0;       // the top 53 bits, independent of the layer
+    const double u = signedUnit52(bits);             // the top 52 bits, independent of the layer
     if (std::abs(u) < z.ratio[i]) return u * z.x[i];  // inside the layer's rectangle
     if (i == 0) return tail(key, u < 0);
     const double x = u * z.x[i];

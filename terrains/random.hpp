@@ -2,6 +2,7 @@
 // Deterministic random numbers that do not depend on the standard library's distributions
 // (whose algorithms are implementation-defined), so the same seed gives the same terrain and
 // the same noise on every platform and with any thread schedule.
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -24,6 +25,12 @@ constexpr std::uint64_t streamKey(std::uint64_t seed, std::uint64_t a, std::uint
 
 // Uniform double in [0, 1) from 53 random bits.
 constexpr double toUnit(std::uint64_t bits) { return double(bits >> 11) * 0x1.0p-53; }
+
+// Uniform double in [−1, 1) from the top 52 bits, by bit assembly (exact, and vectorisable
+// without 64-bit integer conversions): 2·d − 3 with d in [1, 2).
+inline double signedUnit52(std::uint64_t bits) {
+  return 2.0 * std::bit_cast<double>((bits >> 12) | 0x3FF0000000000000ull) - 3.0;
+}
 
 // A small sequential generator (SplitMix64 stream).
 class Rng {
@@ -49,5 +56,14 @@ class Rng {
 // An exact ziggurat sampler (Marsaglia & Tsang's 128 layers in Doornik's form): one 64-bit draw
 // and no transcendental function in 98.8 % of calls, which matters at millions of pixels a scan.
 double normalFromKey(std::uint64_t key);
+
+// The ziggurat's tables, for callers that run the fast path over many keys at once: with
+// bits = mix64(key), layer i = bits & 127 and u = signedUnit52(bits), if |u| < ratio[i] the draw
+// is u·x[i] (exactly what normalFromKey returns); otherwise call normalFromKey(key).
+struct ZigguratTables {
+  const double* x;      // 129 layer edges
+  const double* ratio;  // 128 ratios x[i+1]/x[i]
+};
+const ZigguratTables& zigguratTables();
 
 }  // namespace ambler::terrains
