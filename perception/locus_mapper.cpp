@@ -1,0 +1,287 @@
+#include "perception/locus_mapper.hpp"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "perception/sensor_geometry.hpp"
+
+namespace ambler::perception {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// The part [s0, s1] of the line u + s·v inside `box` (slab method); false if it misses.
+bool clipToBox(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& u, const Eigen::Vector3d& v,
+               double& s0, double& s1) {
+  s0 = -std::numeric_limits<double>::infinity();
+  s1 = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i) {
+    if (std::abs(v[i]) < 1e-15) {
+      if (u[i] < box.min()[i] || u[i] > box.max()[i]) return false;
+      continue;
+    }
+    double a = (box.min()[i] - u[i]) / v[i], b = (box.max()[i] - u[i]) / v[i];
+    if (a > b) std::swap(a, b);
+    s0 = std::max(s0, a);
+    s1 = std::min(s1, b);
+  }
+  return s0 <= s1;
+}
+
+bool checkEven(const std::vector<double>& a, double step) {
+  for (std::size_t i = 1; i < a.size(); ++i)
+    if (std::abs((a[i] - a[0]) - double(i) * step) > 1e-9) return false;
+  return true;
+}
+
+// Crossing-number point-in-polygon test.
+bool insidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  bool inside = false;
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const auto& a = poly[i];
+    const auto& b = poly[j];
+    if ((a.y() > p.y()) != (b.y() > p.y()) &&
+        p.x() < (b.x() - a.x()) * (p.y() - a.y()) / (b.y() - a.y()) + a.x())
+      inside = !inside;
+  }
+  return inside;
+}
+
+}  // namespace
+
+// One evaluation of Δ = ρ_l − I at a scan angle: where it looked and with what weights.
+struct Sample {
+  bool valid = false;   // the line is in front of the sensor, inside the image, all pixels returned
+  bool edge = false;    // one of the pixels used is an occluding-edge pixel
+  double delta = 0, s = 0, rho = 0, theta = 0;
+  int r0 = 0, c0 = 0;   // the top-left pixel of the 2×2 cell
+  double w[4] = {0, 0, 0, 0};  // bilinear weights of (r0,c0), (r0,c0+1), (r0+1,c0), (r0+1,c0+1)
+};
+
+LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const LocusConfig& config)
+    : image_(image), edges_(edges), config_(config), T_SW_(image.T_WS.inverse()) {
+  if (image.rows() < 2 || image.cols() < 2)
+    throw std::invalid_argument("LocusMapper: the range image needs at least 2x2 pixels");
+  if (edges && (edges->rows() != image.rows() || edges->cols() != image.cols()))
+    throw std::invalid_argument("LocusMapper: the edge mask and the range image differ in size");
+  phi0_ = image.phi[0];
+  dphi_ = image.phi[0] - image.phi[1];
+  theta0_ = image.theta[0];
+  dtheta_ = image.theta[1] - image.theta[0];
+  if (!(dphi_ > 0) || !(dtheta_ > 0) || !checkEven(image.phi, -dphi_) || !checkEven(image.theta, dtheta_))
+    throw std::invalid_argument("LocusMapper: scan angles must be evenly spaced, φ falling, θ rising");
+  up_ = T_SW_.linear() * Eigen::Vector3d::UnitZ();
+  for (double phi : image.phi) {
+    sin_phi_.push_back(std::sin(phi));
+    cos_phi_.push_back(std::cos(phi));
+  }
+  for (int r = 0; r < image.rows(); ++r)
+    for (int c = 0; c < image.cols(); ++c)
+      if (image.valid(r, c)) bounds_.extend(image.pointWorld(r, c));
+  if (!bounds_.isEmpty()) {
+    bounds_.min().array() -= config.z_margin_m;
+    bounds_.max().array() += config.z_margin_m;
+  }
+}
+
+namespace {
+
+// Δ at fractional row rf (scan angle with sin sp, cos cp) for the sensor-frame line a + s·b.
+Sample evaluate(const RangeImage& img, const EdgeMask* edges, double theta0, double dtheta, double rf,
+                double sp, double cp, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  Sample out;
+  // The point of the line on the plane of scan angle φ: z·cosφ − y·sinφ = 0.
+  const double den = b.z() * cp - b.y() * sp;
+  if (std::abs(den) < 1e-15) return out;
+  out.s = -(a.z() * cp - a.y() * sp) / den;
+  const Eigen::Vector3d p = a + out.s * b;
+  if (p.y() * cp + p.z() * sp <= 0) return out;  // behind the sensor
+  out.rho = p.norm();
+  out.theta = std::asin(std::clamp(p.x() / out.rho, -1.0, 1.0));
+  const double cf = (out.theta - theta0) / dtheta;
+  const int rows = img.rows(), cols = img.cols();
+  if (!(cf >= 0.0 && cf <= cols - 1) || !(rf >= 0.0 && rf <= rows - 1)) return out;
+  out.r0 = std::min(int(rf), rows - 2);
+  out.c0 = std::min(int(cf), cols - 2);
+  const double fr = rf - out.r0, fc = cf - out.c0;
+  out.w[0] = (1 - fr) * (1 - fc);
+  out.w[1] = (1 - fr) * fc;
+  out.w[2] = fr * (1 - fc);
+  out.w[3] = fr * fc;
+  double I = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (out.w[k] == 0.0) continue;  // a pixel with no weight is not used, returned or not
+    const int r = out.r0 + k / 2, c = out.c0 + k % 2;
+    const float range = img.range(r, c);
+    if (!std::isfinite(range)) return out;  // never bridge a pixel that returned nothing
+    I += out.w[k] * range;
+    if (edges && (*edges)(r, c)) out.edge = true;
+  }
+  out.delta = out.rho - I;
+  out.valid = true;
+  return out;
+}
+
+// A surface point of the image in the sensor frame, if that pixel returned.
+bool pixelPoint(const RangeImage& img, int r, int c, Eigen::Vector3d& p) {
+  if (r < 0 || c < 0 || r >= img.rows() || c >= img.cols() || !img.valid(r, c)) return false;
+  p = img.pointSensor(r, c);
+  return true;
+}
+
+// The local surface normal (sensor frame) around the 2×2 cell at (r0, c0), from the widest
+// returned span across it in each image direction (wider spans average out range noise).
+Eigen::Vector3d localNormal(const RangeImage& img, int r0, int c0, const Eigen::Vector3d& up) {
+  Eigen::Vector3d t[2];
+  bool ok[2] = {false, false};
+  for (int dir = 0; dir < 2; ++dir)
+    for (int span = 2; span >= 0 && !ok[dir]; --span)
+      for (int k = 0; k < 2 && !ok[dir]; ++k) {
+        Eigen::Vector3d p = Eigen::Vector3d::Zero(), q = Eigen::Vector3d::Zero();
+        if (dir == 0)  // along the scanline (θ)
+          ok[dir] = pixelPoint(img, r0 + k, c0 - span / 2, p) && pixelPoint(img, r0 + k, c0 + 1 + (span + 1) / 2, q);
+        else  // across scanlines (φ)
+          ok[dir] = pixelPoint(img, r0 - span / 2, c0 + k, p) && pixelPoint(img, r0 + 1 + (span + 1) / 2, c0 + k, q);
+        if (ok[dir]) t[dir] = q - p;
+      }
+  if (!ok[0] || !ok[1]) return up;
+  const Eigen::Vector3d n = t[0].cross(t[1]);
+  return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : up;
+}
+
+}  // namespace
+
+// σ of the position along the line (docs/locus.md): the range noise of the pixels the locus
+// interpolated, carried along the beam d onto the local surface (normal n) and from there onto
+// the line b: σ_s = σ_ρ·|d·n| / |b·n|, with σ_ρ² = ((kρ²)² + q²/12)·Σw² for bilinear weights w.
+double LocusMapper::sigmaAlongLine(int r0, int c0, const double* w, double rho, const Eigen::Vector3d& p,
+                                   const Eigen::Vector3d& b) const {
+  const double sum_w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + w[3] * w[3];
+  const double noise = config_.noise_k * rho * rho;
+  const double var_rho = (noise * noise + config_.quantization_m * config_.quantization_m / 12.0) * sum_w2;
+  const Eigen::Vector3d n = localNormal(image_, r0, c0, up_);
+  const Eigen::Vector3d d = p / rho;
+  return std::sqrt(var_rho) * std::abs(d.dot(n)) / std::max(std::abs(b.dot(n)), 0.05);
+}
+
+LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
+  LocusHit hit;
+  double s_lo, s_hi;
+  if (bounds_.isEmpty() || !clipToBox(bounds_, u, v, s_lo, s_hi)) return hit;
+  const Eigen::Vector3d a = T_SW_ * u, b = T_SW_.linear() * v;
+  // Scan angles of the segment's ends; φ(s) is monotonic along a line.
+  const Eigen::Vector3d top = a + s_hi * b, bottom = a + s_lo * b;
+  const double rf_top = (phi0_ - std::atan2(top.z(), top.y())) / dphi_;
+  const double rf_bottom = (phi0_ - std::atan2(bottom.z(), bottom.y())) / dphi_;
+  const int rows = image_.rows();
+  const int step = rf_bottom >= rf_top ? 1 : -1;
+  int r = step > 0 ? int(std::ceil(rf_top)) : int(std::floor(rf_top));
+  const int r_end = step > 0 ? int(std::floor(rf_bottom)) : int(std::ceil(rf_bottom));
+  if (step > 0) r = std::max(r, 0);
+  else r = std::min(r, rows - 1);
+
+  // Stage 1: the two scanlines between which Δ turns from negative (the line in front of the
+  // surface) to non-negative (behind it), walking down the line from its top.
+  Sample prev;
+  int prev_row = -1;
+  for (; step > 0 ? (r <= r_end && r < rows) : (r >= r_end && r >= 0); r += step) {
+    const Sample cur = evaluate(image_, edges_, theta0_, dtheta_, r, sin_phi_[r], cos_phi_[r], a, b);
+    ++hit.evaluations;
+    if (!cur.valid) {
+      prev_row = -1;  // a gap (no return, out of view) is never bridged
+      continue;
+    }
+    if (prev_row >= 0 && prev.delta < 0 && cur.delta >= 0) {
+      // Stage 2: search between the two scanlines until the bracket in φ is below ε.
+      double phi1 = image_.phi[prev_row], phi2 = image_.phi[r];
+      double d1 = prev.delta, d2 = cur.delta;
+      bool edge = prev.edge || cur.edge;
+      Sample last = cur;
+      int kept_side = 0;
+      for (int it = 0; it < 200 && std::abs(phi2 - phi1) >= config_.epsilon_rad && d2 != 0.0; ++it) {
+        double phi = 0.5 * (phi1 + phi2);
+        if (!config_.bisection) {
+          const double secant = phi1 - d1 * (phi2 - phi1) / (d2 - d1);
+          const double lo = std::min(phi1, phi2), hi = std::max(phi1, phi2);
+          if (secant > lo && secant < hi) phi = secant;
+        }
+        const Sample m = evaluate(image_, edges_, theta0_, dtheta_, (phi0_ - phi) / dphi_, std::sin(phi),
+                                  std::cos(phi), a, b);
+        ++hit.evaluations;
+        if (!m.valid) return hit;  // the bracket reaches a pixel without a return: unknown
+        edge = edge || m.edge;
+        last = m;
+        if (m.delta < 0) {
+          phi1 = phi, d1 = m.delta;
+          if (kept_side == -1) d2 *= 0.5;  // Illinois: the far end stayed twice, halve it
+          kept_side = -1;
+        } else {
+          phi2 = phi, d2 = m.delta;
+          if (kept_side == 1) d1 *= 0.5;
+          kept_side = 1;
+        }
+      }
+      if (edge) {
+        hit.state = CellState::Shadow;  // the locus meets the image at an occluding edge
+        return hit;
+      }
+      // The root of the final bracket's chord (its midpoint under plain bisection).
+      const double phi = config_.bisection || d2 == d1 ? 0.5 * (phi1 + phi2)
+                                                       : phi1 - d1 * (phi2 - phi1) / (d2 - d1);
+      const Sample f = evaluate(image_, edges_, theta0_, dtheta_, (phi0_ - phi) / dphi_, std::sin(phi),
+                                std::cos(phi), a, b);
+      const Sample& at = f.valid ? f : last;
+      hit.state = CellState::Known;
+      hit.s = at.s;
+      hit.point = u + at.s * v;
+      hit.phi = phi;
+      hit.theta = at.theta;
+      hit.rho = at.rho;
+      hit.sigma = sigmaAlongLine(at.r0, at.c0, at.w, at.rho, a + at.s * b, b);
+      return hit;
+    }
+    prev = cur;
+    prev_row = r;
+  }
+  return hit;
+}
+
+ElevationMap LocusMapper::map(const MapGrid& grid) const {
+  ElevationMap out(grid);
+  tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r)
+      for (int c = 0; c < grid.cols; ++c) {
+        const Eigen::Vector2d xy = grid.center(r, c);
+        const LocusHit hit = elevationAt(xy.x(), xy.y());
+        if (hit.state == CellState::Known) out.setKnown(r, c, float(hit.point.z()), float(hit.sigma));
+        else out.setUnknown(r, c, hit.state);
+      }
+  });
+  return out;
+}
+
+ElevationMap LocusMapper::mapPolygon(const std::vector<Eigen::Vector2d>& polygon, double cell_m) const {
+  if (polygon.size() < 3) throw std::invalid_argument("LocusMapper::mapPolygon: needs at least 3 vertices");
+  Eigen::AlignedBox2d box;
+  for (const auto& p : polygon) box.extend(p);
+  const MapGrid grid = MapGrid::covering(box.min().x(), box.max().x(), box.min().y(), box.max().y(), cell_m);
+  ElevationMap out(grid);
+  tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r)
+      for (int c = 0; c < grid.cols; ++c) {
+        const Eigen::Vector2d xy = grid.center(r, c);
+        if (!insidePolygon(polygon, xy)) continue;
+        const LocusHit hit = elevationAt(xy.x(), xy.y());
+        if (hit.state == CellState::Known) out.setKnown(r, c, float(hit.point.z()), float(hit.sigma));
+        else out.setUnknown(r, c, hit.state);
+      }
+  });
+  return out;
+}
+
+}  // namespace ambler::perception
