@@ -29,9 +29,23 @@ cv::Mat rescale(const cv::Mat& img, double fx, double fy) {
   return out;
 }
 
-// The picture with a title above and a colour scale from `lo` to `hi` below.
+// The picture framed by framePicture with the colour scale of an OpenCV colour map.
 cv::Mat frame(const cv::Mat& picture, const std::string& title, double lo, double hi, const char* unit,
               int colormap) {
+  return framePicture(picture, title, colourRamp(colormap), lo, hi, unit);
+}
+
+}  // namespace
+
+cv::Mat colourRamp(int colormap) {
+  cv::Mat ramp(1, 256, CV_8UC1), colour;
+  for (int i = 0; i < 256; ++i) ramp.at<uchar>(0, i) = uchar(i);
+  cv::applyColorMap(ramp, colour, colormap);
+  return colour;
+}
+
+cv::Mat framePicture(const cv::Mat& picture, const std::string& title, const cv::Mat& ramp, double lo,
+                     double hi, const char* unit) {
   const int pad = 8, head = 28, foot = 46;
   const int width = std::max(picture.cols + 2 * pad, 360);
   cv::Mat canvas(picture.rows + head + foot, width, CV_8UC3, cv::Scalar(255, 255, 255));
@@ -39,11 +53,8 @@ cv::Mat frame(const cv::Mat& picture, const std::string& title, double lo, doubl
   cv::putText(canvas, title, cv::Point(pad, 20), cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0), 1,
               cv::LINE_AA);
   const int bar_w = width - 2 * pad - 160, bar_y = head + picture.rows + 8;
-  cv::Mat ramp(1, 256, CV_8UC1);
-  for (int i = 0; i < 256; ++i) ramp.at<uchar>(0, i) = uchar(i);
-  cv::Mat ramp_colour, bar;
-  cv::applyColorMap(ramp, ramp_colour, colormap);
-  cv::resize(ramp_colour, bar, cv::Size(bar_w, 14), 0, 0, cv::INTER_LINEAR);
+  cv::Mat bar;
+  cv::resize(ramp, bar, cv::Size(bar_w, 14), 0, 0, cv::INTER_LINEAR);
   bar.copyTo(canvas(cv::Rect(pad + 80, bar_y, bar_w, 14)));
   cv::putText(canvas, fmt(lo, unit), cv::Point(pad, bar_y + 12), cv::FONT_HERSHEY_SIMPLEX, 0.4,
               cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
@@ -52,9 +63,7 @@ cv::Mat frame(const cv::Mat& picture, const std::string& title, double lo, doubl
   return canvas;
 }
 
-}  // namespace
-
-cv::Mat shadedRelief(const FloatRaster& z, double cell_m, const std::string& title) {
+Relief reliefImage(const FloatRaster& z, double cell_m) {
   const int rows = int(z.rows()), cols = int(z.cols());
   float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
   for (int i = 0; i < z.size(); ++i)
@@ -91,8 +100,13 @@ cv::Mat shadedRelief(const FloatRaster& z, double cell_m, const std::string& tit
       const cv::Vec3b base = colour.at<cv::Vec3b>(r, c);
       out.at<cv::Vec3b>(r, c) = cv::Vec3b(uchar(base[0] * k), uchar(base[1] * k), uchar(base[2] * k));
     }
-  const double f = std::clamp(900.0 / std::max(rows, cols), 0.25, 4.0);
-  return frame(rescale(out, f, f), title, lo, hi, "m", cv::COLORMAP_VIRIDIS);
+  return {out, lo, hi};
+}
+
+cv::Mat shadedRelief(const FloatRaster& z, double cell_m, const std::string& title) {
+  const Relief relief = reliefImage(z, cell_m);
+  const double f = std::clamp(900.0 / std::max(z.rows(), z.cols()), 0.25, 4.0);
+  return frame(rescale(relief.image, f, f), title, relief.lo, relief.hi, "m", cv::COLORMAP_VIRIDIS);
 }
 
 cv::Mat rangePicture(const perception::RangeImage& image, double max_range_m, const std::string& title) {

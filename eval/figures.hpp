@@ -12,6 +12,22 @@ namespace ambler::eval {
 // dark grey. A scale bar of elevation is drawn along the bottom.
 cv::Mat shadedRelief(const FloatRaster& z, double cell_m, const std::string& title);
 
+// shadedRelief's picture before framing: one BGR pixel per raster cell (NaN cells dark grey), and
+// the elevations [lo, hi] its colours span.
+struct Relief {
+  cv::Mat image;
+  double lo = 0, hi = 0;
+};
+Relief reliefImage(const FloatRaster& z, double cell_m);
+
+// The 256 colours of an OpenCV colour map (cv::COLORMAP_*) as a 1×256 BGR image.
+cv::Mat colourRamp(int colormap);
+
+// `picture` with `title` above and, below, a colour scale (a 1×N BGR ramp stretched to fit) whose
+// ends are labelled `lo` and `hi` in `unit` ("%.2f unit"). The canvas is at least 360 px wide.
+cv::Mat framePicture(const cv::Mat& picture, const std::string& title, const cv::Mat& ramp, double lo,
+                     double hi, const char* unit);
+
 // A range image in false colour (near = warm... far = cool), no return black; pixels stretched
 // so the picture keeps the angular aspect ratio; a range scale along the bottom.
 cv::Mat rangePicture(const perception::RangeImage& image, double max_range_m, const std::string& title);
