@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "eval/io.hpp"
+#include "eval/mapping.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
 #include "sim/ray_scene.hpp"
@@ -189,6 +190,58 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
   std::printf("  %-46s %10.3f\n", "emulator 1024x4096, all cores", large_mrays);
   std::printf("  %-46s %10.3f\n", "bare Embree rtcIntersect16, all cores", bare_mrays);
   std::printf("  %-46s %10.3f\n", "  ratio emulator / bare Embree", large_mrays / bare_mrays);
+  if (!opt.json.empty()) writeJson(opt.json, j);
+  return j;
+}
+
+nlohmann::ordered_json benchMap(const BenchOptions& opt) {
+  std::fprintf(stderr, "bench map: building the benchmark world (mars terrain, seed 1) and one ERIM scan...\n");
+  const auto bw = makeBenchWorld();
+  const sim::RayScene scene(bw->world);
+  const Eigen::Isometry3d T = perception::sensorPose({0, -6, 3}, {0, -30.0 * std::numbers::pi / 180, 0});
+  const sim::ErimConfig erim;  // ERIM defaults: noise, quantisation, wrap, mixed pixels
+  const sim::Scan scan = sim::ErimScanner(scene, erim).scan(T, 1);
+  SensorSpec sensor;  // the same defaults, as the scenario would give them
+  perception::RangeImage image = scan.image;
+  perception::unwrapRanges(image, sensor.ambiguity_m);
+  const auto t_edges = std::chrono::steady_clock::now();
+  const perception::EdgeMask edges = perception::detectRangeEdges(image);
+  const double edges_ms = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_edges).count() * 1e3;
+
+  nlohmann::ordered_json j, one, all, speedup, cart;
+  std::printf("ambler bench map (medians of %d; region x [-5, 5] m, y [-3, 8] m; 64x256 scan)\n", opt.repetitions);
+  std::printf("  %-8s %10s %14s %14s %10s %16s\n", "cell", "cells", "locus 1t ns", "locus all ns", "speedup",
+              "cartesian 1t ns");
+  for (double cell : {0.02, 0.05, 0.10, 0.20}) {
+    MapSpec spec;
+    spec.cell_m = cell;
+    const perception::MapGrid grid = mapGrid(spec);
+    const perception::LocusMapper mapper(image, &edges, locusConfig(spec, sensor));
+    const double cells = double(grid.cells());
+    double t1 = 0, tc = 0;
+    {
+      tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+      t1 = timeMedian(opt.repetitions, [&] { mapper.map(grid); });
+      tc = timeMedian(opt.repetitions, [&] { buildCartesianMap(image, spec, perception::GapFill::Linear); });
+    }
+    const double ta = timeMedian(opt.repetitions, [&] { mapper.map(grid); });
+    char key[16];
+    std::snprintf(key, sizeof key, "%.2f", cell);
+    one[key] = t1 / cells * 1e9;
+    all[key] = ta / cells * 1e9;
+    speedup[key] = t1 / ta;
+    cart[key] = tc / cells * 1e9;
+    std::printf("  %-8.2f %10.0f %14.1f %14.1f %9.2fx %16.1f\n", cell, cells, t1 / cells * 1e9, ta / cells * 1e9,
+                t1 / ta, tc / cells * 1e9);
+  }
+  std::printf("  edge detection (GNC) on the 64x256 image: %.2f ms\n", edges_ms);
+  j["ns_per_cell_1t"] = one;
+  j["ns_per_cell_all"] = all;
+  j["speedup_all"] = speedup;
+  j["cartesian_ns_per_cell_1t"] = cart;
+  j["edges_ms"] = edges_ms;
+  j["threads"] = tbb::info::default_concurrency();
+  j["repetitions"] = opt.repetitions;
   if (!opt.json.empty()) writeJson(opt.json, j);
   return j;
 }

@@ -14,4 +14,8 @@ struct BenchOptions {
 // and emulator vs a bare Embree packet cast on a 1024×4096 scan over all cores. Prints a table.
 nlohmann::ordered_json benchScan(const BenchOptions& options);
 
+// The mapping benchmark (issue 3): nanoseconds per cell of the locus map at 2, 5, 10 and 20 cm on
+// one thread and on all cores, against the Cartesian baseline on the same scan. Prints a table.
+nlohmann::ordered_json benchMap(const BenchOptions& options);
+
 }  // namespace ambler::eval

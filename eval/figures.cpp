@@ -122,9 +122,25 @@ cv::Mat rangePicture(const perception::RangeImage& image, double max_range_m, co
     for (int c = 0; c < cols; ++c)
       level.at<uchar>(r, c) = image.valid(r, c) ? uchar(std::lround(255.0 * (image.range(r, c) - lo) / span)) : 0;
   cv::applyColorMap(level, colour, cv::COLORMAP_TURBO);
+  // Shade by the surface the returns describe (normals from neighbouring returns, light from the
+  // north-west and above): range alone hides rocks and ledges in a smooth colour ramp.
+  const Eigen::Vector3d light = Eigen::Vector3d(-1, 1, 2).normalized();
   for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < cols; ++c)
-      if (!image.valid(r, c)) colour.at<cv::Vec3b>(r, c) = cv::Vec3b(0, 0, 0);
+    for (int c = 0; c < cols; ++c) {
+      if (!image.valid(r, c)) {
+        colour.at<cv::Vec3b>(r, c) = cv::Vec3b(0, 0, 0);
+        continue;
+      }
+      const int r0 = std::max(r - 1, 0), r1 = std::min(r + 1, rows - 1);
+      const int c0 = std::max(c - 1, 0), c1 = std::min(c + 1, cols - 1);
+      if (!image.valid(r0, c) || !image.valid(r1, c) || !image.valid(r, c0) || !image.valid(r, c1)) continue;
+      const Eigen::Vector3d n =
+          (image.pointWorld(r, c1) - image.pointWorld(r, c0)).cross(image.pointWorld(r0, c) - image.pointWorld(r1, c));
+      if (n.norm() == 0) continue;
+      const double shade = 0.45 + 0.55 * std::max(0.0, std::abs(n.normalized().dot(light)));
+      cv::Vec3b& px = colour.at<cv::Vec3b>(r, c);
+      for (int k = 0; k < 3; ++k) px[k] = uchar(px[k] * shade);
+    }
   // Keep the angular aspect: a row spans Δφ, a column Δθ.
   const double dphi = rows > 1 ? std::abs(image.phi[0] - image.phi[1]) : 1.0;
   const double dtheta = cols > 1 ? std::abs(image.theta[1] - image.theta[0]) : 1.0;

@@ -33,6 +33,14 @@ int main(int argc, char** argv) {
   bench_scan->add_option("--reps", bench_opt.repetitions, "Repetitions per measurement (median reported)")
       ->check(CLI::Range(1, 1000));
 
+  std::string bench_map_json;
+  BenchOptions bench_map_opt;
+  auto* bench_map = bench->add_subcommand("map", "Locus map ns/cell at 2, 5, 10, 20 cm (1 thread and all "
+                                                 "cores) vs the Cartesian baseline.");
+  bench_map->add_option("--json", bench_map_json, "Also write the figures to this JSON file");
+  bench_map->add_option("--reps", bench_map_opt.repetitions, "Repetitions per measurement (median reported)")
+      ->check(CLI::Range(1, 1000));
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -46,6 +54,9 @@ int main(int argc, char** argv) {
     } else if (*bench_scan) {
       bench_opt.json = bench_json;
       benchScan(bench_opt);
+    } else if (*bench_map) {
+      bench_map_opt.json = bench_map_json;
+      benchMap(bench_map_opt);
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ambler: error: %s\n", e.what());

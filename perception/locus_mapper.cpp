@@ -154,16 +154,48 @@ Eigen::Vector3d localNormal(const RangeImage& img, int r0, int c0, const Eigen::
   return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : up;
 }
 
+// The variance of linear interpolation between samples of a rough surface, as a range error at
+// fraction f. Terrain is modelled as Brownian (fBm with H = ½) at the pixel scale: then
+// Var[interpolation error] = f(1−f)·σ²h, and σ²h = E[D²]/2 for the second difference
+// D = a(−1) − 2a(0) + a(+1), whose noise variance 6σ_p² is subtracted (docs/locus.md). The mean
+// of D² over the second differences centred on both samples and both sides of the cell.
+double roughnessVariance(const RangeImage& img, int r0, int c0, bool across_rows, double f, double var_pixel) {
+  double sum = 0;
+  int n = 0;
+  for (int side = 0; side < 2; ++side)    // the two pixel lines bounding the cell
+    for (int centre = 0; centre < 2; ++centre) {  // second differences centred on each sample
+      double a[3];
+      bool ok = true;
+      for (int k = 0; k < 3 && ok; ++k) {
+        const int rr = across_rows ? r0 + centre + k - 1 : r0 + side;
+        const int cc = across_rows ? c0 + side : c0 + centre + k - 1;
+        ok = rr >= 0 && cc >= 0 && rr < img.rows() && cc < img.cols() && img.valid(rr, cc);
+        if (ok) a[k] = img.range(rr, cc);
+      }
+      if (!ok) continue;
+      const double d = a[0] - 2 * a[1] + a[2];
+      sum += d * d;
+      ++n;
+    }
+  if (n == 0) return 0.0;
+  return f * (1 - f) * 0.5 * std::max(0.0, sum / n - 6.0 * var_pixel);
+}
+
 }  // namespace
 
-// σ of the position along the line (docs/locus.md): the range noise of the pixels the locus
-// interpolated, carried along the beam d onto the local surface (normal n) and from there onto
-// the line b: σ_s = σ_ρ·|d·n| / |b·n|, with σ_ρ² = ((kρ²)² + q²/12)·Σw² for bilinear weights w.
+// σ of the position along the line (docs/locus.md): the range error of the interpolated image —
+// the pixels' noise, σ_p² = (kρ²)² + q²/12, weighted by Σw², plus the surface's roughness between
+// pixels that interpolation cannot know — carried along the beam d onto the local surface
+// (normal n) and from there onto the line b: σ_s = σ_I·|d·n| / |b·n|.
 double LocusMapper::sigmaAlongLine(int r0, int c0, const double* w, double rho, const Eigen::Vector3d& p,
                                    const Eigen::Vector3d& b) const {
   const double sum_w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + w[3] * w[3];
   const double noise = config_.noise_k * rho * rho;
-  const double var_rho = (noise * noise + config_.quantization_m * config_.quantization_m / 12.0) * sum_w2;
+  const double var_pixel = noise * noise + config_.quantization_m * config_.quantization_m / 12.0;
+  const double fr = w[2] + w[3], fc = w[1] + w[3];
+  const double rough = roughnessVariance(image_, r0, c0, true, fr, var_pixel) +
+                       roughnessVariance(image_, r0, c0, false, fc, var_pixel);
+  const double var_rho = var_pixel * sum_w2 + rough;
   const Eigen::Vector3d n = localNormal(image_, r0, c0, up_);
   const Eigen::Vector3d d = p / rho;
   return std::sqrt(var_rho) * std::abs(d.dot(n)) / std::max(std::abs(b.dot(n)), 0.05);

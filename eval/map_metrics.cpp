@@ -1,0 +1,126 @@
+#include "eval/map_metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace ambler::eval {
+
+namespace {
+
+using perception::CellState;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+double ratio(long num, long den) { return den > 0 ? double(num) / double(den) : kNaN; }
+
+// Linear interpolation between order statistics (numpy's default); `sorted` is non-empty.
+double quantile(const std::vector<double>& sorted, double p) {
+  const double h = p * double(sorted.size() - 1);
+  const auto lo = std::size_t(std::floor(h));
+  if (lo + 1 >= sorted.size()) return sorted.back();
+  return sorted[lo] + (h - double(lo)) * (sorted[lo + 1] - sorted[lo]);
+}
+
+// JSON has no NaN: an undefined figure is null.
+nlohmann::ordered_json number(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
+
+}  // namespace
+
+MapMetrics mapMetrics(const perception::ElevationMap& map, const sim::ElevationRaster& truth,
+                      const sim::VisibilityRaster& visibility) {
+  const auto& grid = map.grid();
+  const auto same = [&](const auto& m) { return m.rows() == grid.rows && m.cols() == grid.cols; };
+  if (!same(map.elevation()) || !same(map.sigma()) || !same(map.state()) || !same(truth) ||
+      !same(visibility))
+    throw std::invalid_argument("mapMetrics: truth and visibility must be " + std::to_string(grid.rows) +
+                                " x " + std::to_string(grid.cols) + " like the map's grid");
+
+  MapMetrics m;
+  m.cells = grid.cells();
+  long covered = 0, shadow_hit = 0, with_sigma = 0, in1 = 0, in2 = 0;
+  double sum2 = 0;
+  std::vector<double> abs_err;
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      const auto state = map.stateAt(r, c);
+      const auto vis = sim::Visibility(visibility(r, c));
+      const bool known = state == CellState::Known;
+      m.known += known;
+      m.shadow += state == CellState::Shadow;
+      m.visible += vis == sim::Visibility::Visible;
+      m.hidden += vis == sim::Visibility::Hidden;
+      covered += known && vis == sim::Visibility::Visible;
+      shadow_hit += state == CellState::Shadow && vis == sim::Visibility::Hidden;
+      if (!known || !std::isfinite(truth(r, c))) continue;
+      const double e = double(map.elevation()(r, c)) - double(truth(r, c));
+      sum2 += e * e;
+      abs_err.push_back(std::abs(e));
+      const double sigma = map.sigma()(r, c);
+      if (!std::isfinite(sigma)) continue;
+      ++with_sigma;
+      in1 += std::abs(e) <= sigma;
+      in2 += std::abs(e) <= 2 * sigma;
+      m.known_in_shadow_above_3sigma += vis == sim::Visibility::Hidden && std::abs(e) > 3 * sigma;
+    }
+  m.compared = long(abs_err.size());
+  m.coverage = ratio(covered, m.visible);
+  m.shadow_precision = ratio(shadow_hit, m.shadow);
+  m.shadow_recall = ratio(shadow_hit, m.hidden);
+  m.within_1sigma = ratio(in1, with_sigma);
+  m.within_2sigma = ratio(in2, with_sigma);
+  if (abs_err.empty()) {
+    m.rms_error_m = m.median_abs_error_m = m.p95_abs_error_m = m.max_abs_error_m = kNaN;
+  } else {
+    std::sort(abs_err.begin(), abs_err.end());
+    m.rms_error_m = std::sqrt(sum2 / double(abs_err.size()));
+    m.median_abs_error_m = quantile(abs_err, 0.5);
+    m.p95_abs_error_m = quantile(abs_err, 0.95);
+    m.max_abs_error_m = abs_err.back();
+  }
+  return m;
+}
+
+nlohmann::ordered_json toJson(const MapMetrics& m, int view) {
+  nlohmann::ordered_json j;
+  j["view"] = view;
+  j["cells"] = m.cells;
+  j["coverage"] = number(m.coverage);
+  j["rms_error_m"] = number(m.rms_error_m);
+  j["median_abs_error_m"] = number(m.median_abs_error_m);
+  j["shadow_precision"] = number(m.shadow_precision);
+  j["shadow_recall"] = number(m.shadow_recall);
+  j["within_1sigma"] = number(m.within_1sigma);
+  j["within_2sigma"] = number(m.within_2sigma);
+  j["known"] = m.known;
+  j["max_abs_error_m"] = number(m.max_abs_error_m);
+  j["p95_abs_error_m"] = number(m.p95_abs_error_m);
+  j["known_in_shadow_above_3sigma"] = m.known_in_shadow_above_3sigma;
+  j["shadow"] = m.shadow;
+  j["visible"] = m.visible;
+  j["hidden"] = m.hidden;
+  j["compared"] = m.compared;
+  return j;
+}
+
+nlohmann::ordered_json cartesianJson(const MapMetrics& m, int view) {
+  nlohmann::ordered_json j;
+  j["view"] = view;
+  j["coverage"] = number(m.coverage);
+  j["rms_error_m"] = number(m.rms_error_m);
+  j["median_abs_error_m"] = number(m.median_abs_error_m);
+  j["cells"] = m.cells;
+  j["known"] = m.known;
+  j["max_abs_error_m"] = number(m.max_abs_error_m);
+  j["p95_abs_error_m"] = number(m.p95_abs_error_m);
+  j["within_1sigma"] = number(m.within_1sigma);
+  j["within_2sigma"] = number(m.within_2sigma);
+  j["compared"] = m.compared;
+  return j;
+}
+
+}  // namespace ambler::eval

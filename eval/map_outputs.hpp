@@ -1,0 +1,30 @@
+#pragma once
+// The map files of a run directory (SCENARIO.md, DIR/maps/): the layers as rasters a GIS or a
+// script reads back bit for bit, and pictures of them for people.
+#include <filesystem>
+#include <string>
+
+#include "perception/elevation_map.hpp"
+#include "sim/ground_truth.hpp"
+
+namespace ambler::eval {
+
+// Writes into `dir` (which must exist):
+//   <stem>_elevation.tiff, <stem>_sigma.tiff   float32, NaN where unknown
+//   <stem>_state.png                           uint8, pixel value = perception::CellState
+//   <stem>_meta.json                           {"x_min_m", "y_max_m", "cell_m", "rows", "cols"}
+//   <stem>_elevation.png, <stem>_sigma.png, <stem>_state_view.png, and, when `truth` is given
+//   (on the map's grid), <stem>_error.png.
+// Every raster is north-up (row 0 is the cell row of largest y). Throws std::runtime_error naming
+// the file that cannot be written, std::invalid_argument when `truth` is not on the map's grid.
+void writeMapFiles(const std::filesystem::path& dir, const std::string& stem,
+                   const perception::ElevationMap& map, const sim::ElevationRaster* truth,
+                   const std::string& title);
+
+// The Cartesian baseline: <stem>_cartesian_elevation.tiff and, when `truth` is given,
+// <stem>_cartesian_error.png. Throws like writeMapFiles.
+void writeCartesianFiles(const std::filesystem::path& dir, const std::string& stem,
+                         const perception::ElevationMap& map, const sim::ElevationRaster* truth,
+                         const std::string& title);
+
+}  // namespace ambler::eval

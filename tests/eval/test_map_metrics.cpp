@@ -1,0 +1,256 @@
+// Map metrics on a hand-made 4 × 5 map whose every figure is worked out by hand, and the map files
+// read back bit for bit. AMBLER_TEST_PICTURES=DIR keeps the pictures in DIR to look at.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <opencv2/imgcodecs.hpp>
+
+#include "eval/io.hpp"
+#include "eval/map_metrics.hpp"
+#include "eval/map_outputs.hpp"
+
+namespace ambler::eval {
+namespace {
+
+namespace fs = std::filesystem;
+using perception::CellState;
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+// The hand-made case. States (K known, S shadow, U unseen) and truth visibility (v visible,
+// h hidden, o out of view):
+//   K K K K K     v v v v h
+//   K K K S S     v v v h h
+//   S U U U U     o v v v o
+//   U U U U U     h o o o o
+// Truth is 1 m everywhere but (1,2), a known cell with no surface below. The seven compared
+// cells have errors 0.5, −0.25, 0.125, 0, −1, 0.75, 0.25 m and σ 0.5, 0.5, 0.0625, 0.1, 0.25,
+// 0.25, 0.2 m: within 1σ (0,0) (0,1) (0,3) — 3/7, the first on the boundary; within 2σ also (0,2)
+// (boundary) and (1,1) — 5/7. (0,4) is hidden, known and 1 m > 3σ off.
+struct Case {
+  perception::ElevationMap map;
+  sim::ElevationRaster truth;
+  sim::VisibilityRaster vis;
+  Case() : map(perception::MapGrid{-1.0, 2.0, 0.5, 4, 5}), truth(4, 5), vis(4, 5) {
+    truth.setConstant(1.0f);
+    truth(1, 2) = kNaN;
+    const float err[7] = {0.5f, -0.25f, 0.125f, 0.0f, -1.0f, 0.75f, 0.25f};
+    const float sig[7] = {0.5f, 0.5f, 0.0625f, 0.1f, 0.25f, 0.25f, 0.2f};
+    const int cells[7][2] = {{0, 0}, {0, 1}, {0, 2}, {0, 3}, {0, 4}, {1, 0}, {1, 1}};
+    for (int i = 0; i < 7; ++i) map.setKnown(cells[i][0], cells[i][1], 1.0f + err[i], sig[i]);
+    map.setKnown(1, 2, 3.0f, 0.1f);
+    map.setUnknown(1, 3, CellState::Shadow);
+    map.setUnknown(1, 4, CellState::Shadow);
+    map.setUnknown(2, 0, CellState::Shadow);
+    const char* v[4] = {"vvvvh", "vvvhh", "ovvvo", "hoooo"};
+    for (int r = 0; r < 4; ++r)
+      for (int c = 0; c < 5; ++c)
+        vis(r, c) = std::uint8_t(v[r][c] == 'v' ? sim::Visibility::Visible
+                                 : v[r][c] == 'h' ? sim::Visibility::Hidden
+                                                  : sim::Visibility::OutOfView);
+  }
+};
+
+TEST(MapMetrics, HandMadeCase) {
+  const Case k;
+  const MapMetrics m = mapMetrics(k.map, k.truth, k.vis);
+  EXPECT_EQ(m.cells, 20);
+  EXPECT_EQ(m.known, 8);
+  EXPECT_EQ(m.shadow, 3);
+  EXPECT_EQ(m.visible, 10);
+  EXPECT_EQ(m.hidden, 4);
+  EXPECT_EQ(m.compared, 7);
+  EXPECT_DOUBLE_EQ(m.coverage, 7.0 / 10.0);  // the seven visible known cells of rows 0–1
+  EXPECT_DOUBLE_EQ(m.rms_error_m, std::sqrt((0.25 + 0.0625 + 0.015625 + 0 + 1 + 0.5625 + 0.0625) / 7));
+  EXPECT_DOUBLE_EQ(m.median_abs_error_m, 0.25);  // 0, 0.125, 0.25, [0.25], 0.5, 0.75, 1
+  EXPECT_DOUBLE_EQ(m.max_abs_error_m, 1.0);
+  EXPECT_NEAR(m.p95_abs_error_m, 0.75 + 0.7 * 0.25, 1e-12);  // rank 0.95 · 6 = 5.7
+  EXPECT_DOUBLE_EQ(m.shadow_precision, 2.0 / 3.0);  // (1,3) (1,4) hidden, (2,0) out of view
+  EXPECT_DOUBLE_EQ(m.shadow_recall, 2.0 / 4.0);     // (0,4) known and (3,0) unseen are missed
+  EXPECT_DOUBLE_EQ(m.within_1sigma, 3.0 / 7.0);
+  EXPECT_DOUBLE_EQ(m.within_2sigma, 5.0 / 7.0);
+  EXPECT_EQ(m.known_in_shadow_above_3sigma, 1);
+}
+
+TEST(MapMetrics, EvenCountMedianAveragesTheMiddlePair) {
+  Case k;
+  k.map.setUnknown(1, 1, CellState::Unseen);  // drops |e| 0.25: 0, 0.125, [0.25, 0.5], 0.75, 1
+  const MapMetrics m = mapMetrics(k.map, k.truth, k.vis);
+  EXPECT_EQ(m.compared, 6);
+  EXPECT_DOUBLE_EQ(m.median_abs_error_m, 0.375);
+}
+
+TEST(MapMetrics, EmptyPopulationsAreNaNAndJsonNull) {
+  perception::ElevationMap map(perception::MapGrid{0.0, 1.0, 0.5, 2, 2});  // all unseen
+  const sim::ElevationRaster truth = sim::ElevationRaster::Constant(2, 2, 0.0f);
+  const sim::VisibilityRaster vis = sim::VisibilityRaster::Constant(2, 2, std::uint8_t(sim::Visibility::Visible));
+  const MapMetrics m = mapMetrics(map, truth, vis);
+  EXPECT_EQ(m.known, 0);
+  EXPECT_DOUBLE_EQ(m.coverage, 0.0);
+  EXPECT_TRUE(std::isnan(m.rms_error_m));
+  EXPECT_TRUE(std::isnan(m.shadow_precision));  // no cell reported Shadow
+  EXPECT_TRUE(std::isnan(m.shadow_recall));     // no cell truly hidden
+  const auto j = toJson(m, 3);
+  EXPECT_EQ(j["view"], 3);
+  EXPECT_EQ(j["coverage"], 0.0);
+  for (const char* key : {"rms_error_m", "median_abs_error_m", "shadow_precision", "shadow_recall",
+                          "within_1sigma", "within_2sigma", "max_abs_error_m", "p95_abs_error_m"})
+    EXPECT_TRUE(j[key].is_null()) << key;
+  EXPECT_EQ(j.dump().find("NaN"), std::string::npos);
+  EXPECT_TRUE(cartesianJson(m, 3)["rms_error_m"].is_null());
+}
+
+TEST(MapMetrics, JsonKeysInContractOrder) {
+  const Case k;
+  const MapMetrics m = mapMetrics(k.map, k.truth, k.vis);
+  const auto keys = [](const nlohmann::ordered_json& j) {
+    std::vector<std::string> out;
+    for (const auto& item : j.items()) out.push_back(item.key());
+    return out;
+  };
+  const std::vector<std::string> map_keys{
+      "view",    "cells",           "coverage",        "rms_error_m", "median_abs_error_m", "shadow_precision",
+      "shadow_recall", "within_1sigma", "within_2sigma", "known", "max_abs_error_m", "p95_abs_error_m",
+      "known_in_shadow_above_3sigma", "shadow", "visible", "hidden", "compared"};
+  EXPECT_EQ(keys(toJson(m, 0)), map_keys);
+  const std::vector<std::string> cart_keys{"view", "coverage", "rms_error_m", "median_abs_error_m", "cells",
+                                           "known", "max_abs_error_m", "p95_abs_error_m", "within_1sigma",
+                                           "within_2sigma", "compared"};
+  EXPECT_EQ(keys(cartesianJson(m, 0)), cart_keys);
+  EXPECT_EQ(toJson(m, 0)["within_1sigma"].get<double>(), 3.0 / 7.0);
+}
+
+TEST(MapMetrics, RejectsRastersOffTheMapGrid) {
+  const Case k;
+  EXPECT_THROW(mapMetrics(k.map, sim::ElevationRaster(5, 4), k.vis), std::invalid_argument);
+  EXPECT_THROW(mapMetrics(k.map, k.truth, sim::VisibilityRaster(4, 4)), std::invalid_argument);
+}
+
+// A directory that is removed afterwards, or AMBLER_TEST_PICTURES if set (kept).
+struct OutDir {
+  fs::path dir;
+  bool keep = false;
+  OutDir() {
+    static int n = 0;
+    if (const char* env = std::getenv("AMBLER_TEST_PICTURES")) {
+      dir = env, keep = true;
+    } else {
+      dir = fs::temp_directory_path() / ("ambler-maps-" + std::to_string(::getpid()) + "-" + std::to_string(n++));
+    }
+    fs::create_directories(dir);
+  }
+  ~OutDir() {
+    std::error_code ec;
+    if (!keep) fs::remove_all(dir, ec);
+  }
+};
+
+bool sameBits(const FloatRaster& a, const perception::MapRaster& b) {
+  return a.rows() == b.rows() && a.cols() == b.cols() &&
+         std::memcmp(a.data(), b.data(), sizeof(float) * std::size_t(a.size())) == 0;
+}
+
+TEST(MapFiles, RastersReadBackBitForBit) {
+  const Case k;
+  OutDir out;
+  writeMapFiles(out.dir, "case", k.map, &k.truth, "hand-made case");
+  EXPECT_TRUE(sameBits(readTiff(out.dir / "case_elevation.tiff"), k.map.elevation()));
+  EXPECT_TRUE(sameBits(readTiff(out.dir / "case_sigma.tiff"), k.map.sigma()));
+  const cv::Mat state = cv::imread((out.dir / "case_state.png").string(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(state.type(), CV_8UC1);
+  ASSERT_EQ(state.rows, 4);
+  ASSERT_EQ(state.cols, 5);
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 5; ++c) EXPECT_EQ(state.at<std::uint8_t>(r, c), k.map.state()(r, c)) << r << "," << c;
+  EXPECT_EQ(state.at<std::uint8_t>(2, 0), 2);  // values are the states themselves
+  EXPECT_EQ(state.at<std::uint8_t>(0, 0), 1);
+
+  std::ifstream in(out.dir / "case_meta.json");
+  const auto meta = nlohmann::ordered_json::parse(in);
+  std::vector<std::string> keys;
+  for (const auto& item : meta.items()) keys.push_back(item.key());
+  EXPECT_EQ(keys, (std::vector<std::string>{"x_min_m", "y_max_m", "cell_m", "rows", "cols"}));
+  EXPECT_EQ(meta["x_min_m"].get<double>(), -1.0);
+  EXPECT_EQ(meta["y_max_m"].get<double>(), 2.0);
+  EXPECT_EQ(meta["cell_m"].get<double>(), 0.5);
+  EXPECT_EQ(meta["rows"].get<int>(), 4);
+  EXPECT_EQ(meta["cols"].get<int>(), 5);
+
+  for (const char* name : {"case_elevation.png", "case_error.png", "case_sigma.png", "case_state_view.png"}) {
+    const cv::Mat pic = cv::imread((out.dir / name).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(pic.empty()) << name;
+    EXPECT_EQ(pic.type(), CV_8UC3) << name;
+    EXPECT_GE(pic.cols, 600) << name;
+  }
+}
+
+TEST(MapFiles, RowZeroIsNorth) {
+  // A single known cell at the north-west point (−0.9, 1.9) lands at raster (0, 0), and the meta
+  // formula x = x_min + (c + ½)·cell, y = y_max − (r + ½)·cell gives back its centre.
+  perception::ElevationMap map(perception::MapGrid{-1.0, 2.0, 0.5, 4, 5});
+  const auto cell = map.grid().cellOf(-0.9, 1.9);
+  ASSERT_TRUE(cell);
+  map.setKnown((*cell)(0), (*cell)(1), 7.0f, 0.01f);
+  OutDir out;
+  writeMapFiles(out.dir, "nw", map, nullptr, "north-west");
+  const FloatRaster z = readTiff(out.dir / "nw_elevation.tiff");
+  EXPECT_EQ(z(0, 0), 7.0f);
+  EXPECT_TRUE(std::isnan(z(3, 0)));
+  std::ifstream in(out.dir / "nw_meta.json");
+  const auto meta = nlohmann::json::parse(in);
+  const double cell_m = meta["cell_m"];
+  EXPECT_DOUBLE_EQ(meta["x_min_m"].get<double>() + 0.5 * cell_m, -0.75);
+  EXPECT_DOUBLE_EQ(meta["y_max_m"].get<double>() - 0.5 * cell_m, 1.75);
+  EXPECT_FALSE(fs::exists(out.dir / "nw_error.png"));  // no truth, no error picture
+}
+
+TEST(MapFiles, CartesianFilesAndGridMismatch) {
+  const Case k;
+  OutDir out;
+  writeCartesianFiles(out.dir, "case", k.map, &k.truth, "hand-made case, Cartesian");
+  EXPECT_TRUE(sameBits(readTiff(out.dir / "case_cartesian_elevation.tiff"), k.map.elevation()));
+  EXPECT_FALSE(cv::imread((out.dir / "case_cartesian_error.png").string()).empty());
+  const sim::ElevationRaster wrong(3, 5);
+  EXPECT_THROW(writeMapFiles(out.dir, "bad", k.map, &wrong, "x"), std::invalid_argument);
+}
+
+// A larger synthetic map to look at: a smooth surface, a fan-shaped field of view, a shadow
+// behind a ridge, σ growing with range and errors of about σ.
+TEST(MapFiles, PicturesOfASyntheticMap) {
+  const perception::MapGrid grid{-5.0, 8.0, 0.1, 110, 100};
+  perception::ElevationMap map(grid);
+  sim::ElevationRaster truth(grid.rows, grid.cols);
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      const auto p = grid.center(r, c);
+      const double ridge = 0.4 * std::exp(-std::pow((p.y() - 2.0) / 0.4, 2));
+      truth(r, c) = float(0.15 * std::sin(0.9 * p.x()) * std::cos(0.7 * p.y()) + ridge);
+      const double range = std::hypot(p.x(), p.y() + 6.0), bearing = std::atan2(p.x(), p.y() + 6.0);
+      if (std::abs(bearing) > 0.55 || range < 3.5) continue;
+      if (p.y() > 2.5 && p.y() < 2.5 + 0.2 * range) {
+        map.setUnknown(r, c, CellState::Shadow);
+        continue;
+      }
+      const double sigma = 0.0003 * range * range + 0.005;
+      const double wiggle = std::sin(12.9898 * r + 78.233 * c) * 43758.5453;
+      const double e = 2.0 * (wiggle - std::floor(wiggle) - 0.5) * sigma * 1.7;
+      map.setKnown(r, c, truth(r, c) + float(e), float(sigma));
+    }
+  OutDir out;
+  writeMapFiles(out.dir, "synthetic", map, &truth, "synthetic view 0");
+  writeCartesianFiles(out.dir, "synthetic", map, &truth, "synthetic view 0, Cartesian");
+  for (const char* name : {"synthetic_elevation.png", "synthetic_error.png", "synthetic_sigma.png",
+                           "synthetic_state_view.png", "synthetic_cartesian_error.png"}) {
+    const cv::Mat pic = cv::imread((out.dir / name).string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(pic.empty()) << name;
+    EXPECT_GE(pic.cols, 600) << name;
+  }
+}
+
+}  // namespace
+}  // namespace ambler::eval
