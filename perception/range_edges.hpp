@@ -1,6 +1,7 @@
 #pragma once
 // Occluding edges in a range image by Graduated Non-Convexity (Blake & Zisserman's weak membrane),
 // and the unwrapping of ranges folded by the ambiguity interval. Onboard code: no simulator here.
+// Design and its reasons: docs/range_edges.md.
 #include <Eigen/Core>
 #include <cstdint>
 
@@ -11,25 +12,35 @@ namespace ambler::perception {
 // 1 where a pixel touches a depth discontinuity (both pixels either side of it), else 0.
 using EdgeMask = Eigen::Matrix<std::uint8_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
-struct GncConfig {
-  // Weak membrane energy E = Σ (f − d)² + Σ λ²·g(∇f) with the truncated quadratic g; a
-  // discontinuity costs α = λ²·h0², so h0 is the smallest jump (in metres of range, scaled
-  // by range: see the docs) that is worth a break.
-  double lambda = 4.0;
-  double h0 = 0.25;
-  bool relative = true;   // measure jumps relative to range (a jump of h0·ρ at range ρ)
-  int iterations_per_p = 20;  // SOR sweeps at each step of the p-sequence
-  int p_steps = 8;        // p from 1 down to 1/(2λ) geometrically
+// The range noise both functions assume (paper §3.3 and the ERIM's 8-bit counts).
+struct RangeNoise {
+  double k = 3e-4;                 // σ_ρ = k·ρ², ρ in metres
+  double quantization_m = 0.0762;  // one count; its error is uniform, σ = q/√12
+  // σ(ρ) = q/√12 + k·ρ²: bounds the root-sum-square of the two, and is within √2 of it.
+  double sigma(double rho) const;
 };
 
-// The edges of `image` (NaN pixels neither smooth nor break anything; a valid pixel next to an
-// invalid one is not an edge by itself).
+struct GncConfig {
+  RangeNoise noise;
+  // The membrane runs on the noise-normalised range F(ρ) = ∫dρ/σ(ρ) (one unit = one σ at every
+  // range) with each link's local trend removed; E = Σ(f − d)² + Σ g(f_j − f_i − s_ij), g the
+  // truncated quadratic λ²t² capped at α = λ²h0².
+  double lambda = 2.0;  // membrane scale, pixels
+  double h0 = 6.0;      // contrast threshold, σ units: the smallest jump beyond the trend that breaks
+  int sweeps = 5;       // red-black SOR sweeps at each step of the p-sequence 1, 1/2, … 1/(2λ)
+};
+
+// The edges of `image` (NaN or non-positive pixels carry no data: their links neither smooth nor
+// break, so a valid pixel next to an invalid one is not an edge by itself). Throws
+// std::invalid_argument for a config out of range.
 EdgeMask detectRangeEdges(const RangeImage& image, const GncConfig& config = {});
 
-// Unwraps ranges folded by the ambiguity interval A: scanline by scanline from the near field
-// (the bottom row, looking down), adds multiples of A where continuity with the pixel below (or
-// beside) demands it. Pixels whose fold cannot be decided from a continuous neighbour become NaN.
-// Returns the number of pixels unwrapped.
-long unwrapRanges(RangeImage& image, double ambiguity_m);
+// Unwraps ranges folded by the ambiguity interval A, in place. The bottom two rows look down at the
+// near field and are taken as unfolded (ρ < A); each row above takes, per pixel, the multiple of A
+// continuous with a linear prediction from the two unwrapped pixels below, or else from two
+// unwrapped pixels beside it in the same row. A pixel whose fold no continuous neighbour decides
+// becomes NaN. Returns the number of pixels that received a non-zero multiple of A. Throws
+// std::invalid_argument if ambiguity_m is not positive.
+long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise = {});
 
 }  // namespace ambler::perception
