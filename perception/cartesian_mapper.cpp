@@ -1,11 +1,7 @@
 #include "perception/cartesian_mapper.hpp"
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
@@ -25,49 +21,10 @@ void checkGrid(const MapGrid& grid) {
     throw std::invalid_argument("cartesianMap: the map grid is empty or its cell size is not > 0");
 }
 
-// One pixel's return in the world frame and the linear index of the cell holding it (−1: no
-// return, or outside the grid).
-struct Sample {
-  double x, y, z;
-  long cell;
-};
-
 // `grid` grown by `pad` cells on every side.
 MapGrid padded(const MapGrid& grid, int pad) {
   return {grid.x_min - pad * grid.cell, grid.y_max + pad * grid.cell, grid.cell, grid.rows + 2 * pad,
           grid.cols + 2 * pad};
-}
-
-// Eq. 1 for every pixel, rotated into the world, binned into `grid` grown by `pad` cells. The cell
-// is found with grid's own arithmetic, so a padded binning agrees bit for bit with binPoints inside
-// the grid. Pixels are independent: the rows can be split across threads in any way.
-std::vector<Sample> worldSamples(const RangeImage& image, const MapGrid& grid, int pad) {
-  const int rows = image.rows(), cols = image.cols();
-  std::vector<double> sin_phi(rows), cos_phi(rows), sin_theta(cols), cos_theta(cols);
-  for (int r = 0; r < rows; ++r) sin_phi[r] = std::sin(image.phi[r]), cos_phi[r] = std::cos(image.phi[r]);
-  for (int c = 0; c < cols; ++c)
-    sin_theta[c] = std::sin(image.theta[c]), cos_theta[c] = std::cos(image.theta[c]);
-  const Eigen::Matrix3d R = image.T_WS.linear();
-  const Eigen::Vector3d t = image.T_WS.translation();
-
-  std::vector<Sample> samples(std::size_t(rows) * cols);
-  tbb::parallel_for(tbb::blocked_range<int>(0, rows, 8), [&](const tbb::blocked_range<int>& rr) {
-    for (int r = rr.begin(); r < rr.end(); ++r)
-      for (int c = 0; c < cols; ++c) {
-        Sample& s = samples[std::size_t(r) * cols + c];
-        const float rho = image.range(r, c);
-        s.cell = -1;
-        if (!std::isfinite(rho)) continue;
-        const Eigen::Vector3d beam(sin_theta[c], cos_phi[r] * cos_theta[c], sin_phi[r] * cos_theta[c]);
-        const Eigen::Vector3d p = R * (double(rho) * beam) + t;
-        s.x = p.x(), s.y = p.y(), s.z = p.z();
-        const double u = std::floor((p.x() - grid.x_min) / grid.cell) + pad;  // as MapGrid::cellOf
-        const double v = std::floor((grid.y_max - p.y()) / grid.cell) + pad;
-        if (u >= 0 && u < grid.cols + 2 * pad && v >= 0 && v < grid.rows + 2 * pad)
-          s.cell = long(v) * (grid.cols + 2 * pad) + long(u);
-      }
-  });
-  return samples;
 }
 
 using Mask = Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -76,18 +33,18 @@ using Mask = Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor
 // marked row (two sweeps), then per row the lower envelope of the parabolas (c − c')² + Δr(c')²
 // (Felzenszwalb & Huttenlocher 2012). Returns the linear index of the nearest marked cell, −1 where
 // the grid has none. Linear time whatever the distance.
-std::vector<long> nearestMarked(const Mask& count) {
-  const int R = int(count.rows()), C = int(count.cols());
+std::vector<long> nearestMarked(const Mask& marked) {
+  const int R = int(marked.rows()), C = int(marked.cols());
   std::vector<int> near_row(std::size_t(R) * C, -1);
   for (int c = 0; c < C; ++c) {
     int last = -1;
     for (int r = 0; r < R; ++r) {
-      if (count(r, c)) last = r;
+      if (marked(r, c)) last = r;
       near_row[std::size_t(r) * C + c] = last;
     }
     int next = -1;
     for (int r = R - 1; r >= 0; --r) {
-      if (count(r, c)) next = r;
+      if (marked(r, c)) next = r;
       int& best = near_row[std::size_t(r) * C + c];
       if (next >= 0 && (best < 0 || next - r < r - best)) best = next;  // a tie keeps the upper row
     }
@@ -160,14 +117,15 @@ void fillLinear(const CartesianBins& bins, double max_gap_m, ElevationMap& map) 
   for (int r = 0; r < grid.rows; ++r)
     for (int c = 0; c < grid.cols; ++c) {
       if (bins.count(r, c) == 0 || !needed(r, c)) continue;
-      vertices.push_back({(bins.mean_x(r, c) - grid.x_min) / grid.cell, (grid.y_max - bins.mean_y(r, c)) / grid.cell,
-                          bins.mean_z(r, c)});
+      vertices.push_back({(bins.mean_x(r, c) - grid.x_min) / grid.cell,
+                          (grid.y_max - bins.mean_y(r, c)) / grid.cell, bins.mean_z(r, c)});
       uv.emplace_back(vertices.back().u, vertices.back().v);
     }
 
-  fprintf(stderr, "vertices %zu of %ld\n", vertices.size(), (long)(bins.count.array() > 0).count());
   const double longest = max_gap_m / grid.cell + std::sqrt(2.0);  // in cells
-  const auto len2 = [](const Vertex& p, const Vertex& q) { return (p.u - q.u) * (p.u - q.u) + (p.v - q.v) * (p.v - q.v); };
+  const auto len2 = [](const Vertex& p, const Vertex& q) {
+    return (p.u - q.u) * (p.u - q.u) + (p.v - q.v) * (p.v - q.v);
+  };
   for (const auto& tri : delaunayTriangles(uv)) {
     const Vertex &a = vertices[tri[0]], &b = vertices[tri[1]], &c = vertices[tri[2]];
     if (std::max({len2(a, b), len2(b, c), len2(c, a)}) > longest * longest) continue;  // spans a hole
@@ -191,40 +149,56 @@ void fillLinear(const CartesianBins& bins, double max_gap_m, ElevationMap& map) 
   }
 }
 
+// Eq. 1 for every pixel, rotated into the world, binned into `grid` grown by `pad` cells. The cell
+// is found with the grid's own arithmetic (as MapGrid::cellOf), so a padded binning agrees bit for
+// bit with binPoints inside the grid. One thread, in pixel order: floating-point sums depend on
+// their order, and the whole image takes a fraction of a millisecond.
 CartesianBins binPadded(const RangeImage& image, const MapGrid& unpadded, int pad) {
-  const std::vector<Sample> samples = worldSamples(image, unpadded, pad);
   const MapGrid grid = padded(unpadded, pad);
+  const int rows = image.rows(), cols = image.cols();
+  std::vector<double> sin_phi(rows), cos_phi(rows), sin_theta(cols), cos_theta(cols);
+  for (int r = 0; r < rows; ++r) sin_phi[r] = std::sin(image.phi[r]), cos_phi[r] = std::cos(image.phi[r]);
+  for (int c = 0; c < cols; ++c)
+    sin_theta[c] = std::sin(image.theta[c]), cos_theta[c] = std::cos(image.theta[c]);
+  const Eigen::Matrix3d R = image.T_WS.linear();
+  const Eigen::Vector3d t = image.T_WS.translation();
+
+  struct Sums {  // z about the cell's first z, so that the spread needs no cancelling of large sums
+    int n = 0;
+    double x = 0, y = 0, z0 = 0, dz = 0, dz2 = 0;
+  };
+  std::vector<Sums> sums(grid.cells());
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c) {
+      const float rho = image.range(r, c);
+      if (!std::isfinite(rho)) continue;
+      const Eigen::Vector3d beam(sin_theta[c], cos_phi[r] * cos_theta[c], sin_phi[r] * cos_theta[c]);
+      const Eigen::Vector3d p = R * (double(rho) * beam) + t;
+      const double u = std::floor((p.x() - unpadded.x_min) / grid.cell) + pad;
+      const double v = std::floor((unpadded.y_max - p.y()) / grid.cell) + pad;
+      if (!(u >= 0 && u < grid.cols && v >= 0 && v < grid.rows)) continue;
+      Sums& s = sums[std::size_t(v) * grid.cols + std::size_t(u)];
+      if (s.n++ == 0) s.z0 = p.z();
+      const double dz = p.z() - s.z0;
+      s.x += p.x(), s.y += p.y(), s.dz += dz, s.dz2 += dz * dz;
+    }
 
   CartesianBins bins;
-  bins.count = CountRaster::Zero(grid.rows, grid.cols);
-  bins.mean_x = PointRaster::Zero(grid.rows, grid.cols);
-  bins.mean_y = PointRaster::Zero(grid.rows, grid.cols);
-  bins.mean_z = PointRaster::Zero(grid.rows, grid.cols);
-  bins.sem_z = PointRaster::Zero(grid.rows, grid.cols);
-  // Sums in pixel order, on one thread: floating-point addition is not associative, and a
-  // 64 × 256 image takes tens of microseconds here.
-  for (const Sample& s : samples) {
-    if (s.cell < 0) continue;
-    bins.count.data()[s.cell] += 1;
-    bins.mean_x.data()[s.cell] += s.x;
-    bins.mean_y.data()[s.cell] += s.y;
-    bins.mean_z.data()[s.cell] += s.z;
-  }
+  bins.count.resize(grid.rows, grid.cols);
+  bins.mean_x.resize(grid.rows, grid.cols), bins.mean_y.resize(grid.rows, grid.cols);
+  bins.mean_z.resize(grid.rows, grid.cols), bins.sem_z.resize(grid.rows, grid.cols);
   for (long i = 0; i < grid.cells(); ++i) {
-    const int n = bins.count.data()[i];
-    bins.mean_x.data()[i] = n > 0 ? bins.mean_x.data()[i] / n : kNaN;
-    bins.mean_y.data()[i] = n > 0 ? bins.mean_y.data()[i] / n : kNaN;
-    bins.mean_z.data()[i] = n > 0 ? bins.mean_z.data()[i] / n : kNaN;
-  }
-  // Second pass for the spread about the mean (no cancellation, unlike Σz² − n·z̄²).
-  for (const Sample& s : samples) {
-    if (s.cell < 0) continue;
-    const double d = s.z - bins.mean_z.data()[s.cell];
-    bins.sem_z.data()[s.cell] += d * d;
-  }
-  for (long i = 0; i < grid.cells(); ++i) {
-    const int n = bins.count.data()[i];
-    bins.sem_z.data()[i] = n > 1 ? std::sqrt(bins.sem_z.data()[i] / (double(n - 1) * n)) : kNaN;
+    const Sums& s = sums[i];
+    bins.count.data()[i] = s.n;
+    bins.mean_x.data()[i] = s.n > 0 ? s.x / s.n : kNaN;
+    bins.mean_y.data()[i] = s.n > 0 ? s.y / s.n : kNaN;
+    bins.mean_z.data()[i] = s.n > 0 ? s.z0 + s.dz / s.n : kNaN;
+    if (s.n < 2) {
+      bins.sem_z.data()[i] = kNaN;  // one point has no spread
+      continue;
+    }
+    const double m2 = std::max(0.0, s.dz2 - s.dz * s.dz / s.n);  // Σ(z − z̄)²
+    bins.sem_z.data()[i] = std::sqrt(m2 / (double(s.n - 1) * s.n));
   }
   return bins;
 }
@@ -242,8 +216,11 @@ ElevationMap cartesianMap(const RangeImage& image, const MapGrid& grid, const Ca
     throw std::invalid_argument("cartesianMap: max_gap_m must be finite and >= 0");
   // Points just outside the grid still serve the cells at its border, as the locus algorithm's
   // would: bin into a margin as wide as a fill can reach, fill, then crop.
-  const double reach = config.max_gap_m / grid.cell + (config.gap_fill == GapFill::Linear ? std::sqrt(2.0) : 0.0);
-  const int pad = config.gap_fill == GapFill::None ? 0 : int(std::ceil(reach)) + 1;
+  // The margin is capped at the map's own size, which bounds memory whatever max_gap_m is.
+  const bool linear = config.gap_fill == GapFill::Linear;
+  const double reach = config.max_gap_m / grid.cell + (linear ? std::sqrt(2.0) : 0.0);  // in cells
+  const double limit = double(grid.rows) + grid.cols;
+  const int pad = config.gap_fill == GapFill::None ? 0 : int(std::min(std::ceil(reach), limit)) + 1;
   const CartesianBins bins = binPadded(image, grid, pad);
   ElevationMap work(padded(grid, pad));
   for (int r = 0; r < work.grid().rows; ++r)

@@ -20,8 +20,9 @@ enum class GapFill {
 struct CartesianConfig {
   GapFill gap_fill = GapFill::Linear;
   // Gaps wider than this stay unknown: no interpolation across holes such as range shadows.
-  // Nearest: the largest centre-to-centre distance to the binned cell that gives the value.
-  // Linear: triangles whose longest edge exceeds max_gap_m + one cell diagonal are not used.
+  // Nearest: the largest centre-to-centre distance to the binned cell that gives the value (so it
+  // also reaches this far past the edge of the data). Linear: triangles whose longest edge exceeds
+  // max_gap_m + one cell diagonal are not used; it never extrapolates.
   double max_gap_m = 0.5;
 };
 
@@ -36,13 +37,15 @@ struct CartesianBins {
   PointRaster sem_z;                    // standard error of mean_z; NaN below two points
 };
 
-// Bins every valid pixel of `image` into `grid` by the cell containing its (x, y). The result does
-// not depend on the number of threads. Throws std::invalid_argument on an empty grid or cell ≤ 0.
+// Bins every valid (finite) pixel of `image` into `grid` by the cell containing its world (x, y),
+// exactly as MapGrid::cellOf. Deterministic. Throws std::invalid_argument on an empty grid or a
+// cell size that is not > 0.
 CartesianBins binPoints(const RangeImage& image, const MapGrid& grid);
 
 // The baseline elevation map: binned cells are Known with the mean z and σ = sem_z; filled cells
-// are Known with σ = NaN (no error model); the rest stay Unseen. Deterministic. Throws
-// std::invalid_argument as binPoints, or if config.max_gap_m is negative or not finite.
+// are Known with σ = NaN (no error model); the rest stay Unseen. Points just off the grid take part
+// in filling its border cells. Deterministic. Throws std::invalid_argument as binPoints, or if
+// config.max_gap_m is negative or not finite.
 ElevationMap cartesianMap(const RangeImage& image, const MapGrid& grid,
                           const CartesianConfig& config = {});
 
