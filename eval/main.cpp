@@ -1,4 +1,4 @@
-// The ambler command line: run a scenario, run benchmarks.
+// The ambler command line: run a scenario, sweep scenarios, run benchmarks.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -8,6 +8,7 @@
 #include "eval/bench.hpp"
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
+#include "eval/sweep.hpp"
 
 int main(int argc, char** argv) {
   using namespace ambler::eval;
@@ -22,6 +23,25 @@ int main(int argc, char** argv) {
   run->add_option("scenario", scenario_file, "Scenario YAML (see docs/scenario.md)")->required();
   run->add_option("--out,-o", out_dir, "Run directory to write (created if missing)")->required();
   run->add_flag("--quiet,-q", quiet, "No progress lines on stderr");
+
+  std::string sweep_file, sweep_out, sweep_shard, sweep_keep = "metrics";
+  int sweep_jobs = 1;
+  bool sweep_merge = false, sweep_timing = false, sweep_quiet = false;
+  auto* sweep = app.add_subcommand("sweep", "Run the cartesian product of a sweep's axes over a base scenario; "
+                                            "one row per run in DIR/results.csv (see docs/sweeps.md).");
+  sweep->add_option("sweep", sweep_file, "Sweep YAML (see docs/sweeps.md)")->required();
+  sweep->add_option("--out,-o", sweep_out, "Sweep directory: results.csv and runs/<k>/")->required();
+  auto* shard_opt = sweep->add_option("--shard", sweep_shard,
+                                      "Run only shard K of N (1-based): the runs k with k mod N = K-1, "
+                                      "into DIR/results.shard-K-of-N.csv");
+  sweep->add_flag("--merge", sweep_merge, "Merge DIR/results.shard-*-of-N.csv into DIR/results.csv; runs nothing");
+  sweep->add_option("--jobs,-j", sweep_jobs, "Scenarios run at once (each already uses every core)")
+      ->capture_default_str();
+  sweep->add_option("--keep", sweep_keep, "What stays of each run directory: none, metrics (metrics.json and "
+                                          "scenario.resolved.yaml) or all")
+      ->capture_default_str();
+  sweep->add_flag("--timing", sweep_timing, "Also the timing_s.* columns (rows then differ from run to run)");
+  sweep->add_flag("--quiet,-q", sweep_quiet, "No progress lines on stderr");
 
   auto* bench = app.add_subcommand("bench", "Measure speed; prints a table of medians.");
   bench->require_subcommand(1);
@@ -51,6 +71,19 @@ int main(int argc, char** argv) {
     if (*run) {
       const Scenario sc = loadScenario(scenario_file);
       runScenario(sc, RunOptions{out_dir, !quiet});
+    } else if (*sweep) {
+      SweepOptions opt{sweep_out, std::nullopt, sweep_jobs, parseKeep(sweep_keep), sweep_timing, !sweep_quiet};
+      if (shard_opt->count()) opt.shard = parseShard(sweep_shard);
+      if (opt.jobs < 1) throw SweepError("--jobs: expected an integer >= 1, got " + std::to_string(opt.jobs));
+      if (sweep_merge && (opt.shard || sweep_timing)) {
+        throw SweepError(std::string("--merge: merges the shards' files; ") +
+                         (opt.shard ? "--shard" : "--timing") + " does not apply");
+      }
+      const Sweep sw = loadSweep(sweep_file);
+      if (sweep_merge)
+        mergeSweep(sw, sweep_out, !sweep_quiet);
+      else
+        runSweep(sw, opt);
     } else if (*bench_scan) {
       bench_opt.json = bench_json;
       benchScan(bench_opt);
