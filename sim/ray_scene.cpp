@@ -218,6 +218,9 @@ RayScene::RayScene(const World& world) : impl_(std::make_unique<Impl>()) {
   rtcSetDeviceErrorFunction(impl_->device, onEmbreeError, &impl_->error);
   impl_->scene = rtcNewScene(impl_->device);
   rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+  // Watertight: a ray through a shared edge or vertex of the hfield (every vertical ground-truth
+  // ray through a cell centre on the terrain grid) must not slip through the crack.
+  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
   impl_->primitive_of.assign(m->ngeom, nullptr);
   impl_->planes_of.resize(m->ngeom);
   for (int g = 0; g < m->ngeom; ++g) {

@@ -44,6 +44,30 @@ TEST(GroundTruth, HeightfieldQueryEqualsVerticalMjRay) {
   }
 }
 
+// Vertical rays exactly through the terrain grid's vertices and edges (map cell centres on a
+// 10 cm grid over a 5 cm hfield) must not slip through the cracks between triangles: the ground
+// truth of a tilted plane is the plane everywhere, and a plane hides nothing from the sensor.
+TEST(GroundTruth, WatertightOnGridAlignedRays) {
+  const double a = 0.0, b = std::tan(15 * kDeg);
+  const TerrainWorld w(test::planeTerrain(a, b, 0.0, 10.0, 0.05));
+  const GroundTruth truth(*w.scene);
+  const auto grid = perception::MapGrid::covering(-5, 5, -3, 8, 0.1);
+  const auto z = truth.elevation(grid);
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      const Eigen::Vector2d p = grid.center(r, c);
+      ASSERT_NEAR(z(r, c), a * p.x() + b * p.y(), 1e-5) << p.transpose();
+    }
+  ErimConfig cfg;
+  const auto vis = truth.visibility(grid, z, perception::sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}), cfg);
+  int visible = 0;
+  for (int i = 0; i < vis.size(); ++i) {
+    ASSERT_NE(Visibility(vis.data()[i]), Visibility::Hidden) << "cell " << i;
+    visible += Visibility(vis.data()[i]) == Visibility::Visible;
+  }
+  EXPECT_GT(visible, 3000);
+}
+
 // Every ray of a 64×256 ERIM scan of a fractal terrain with rocks: Embree and mj_ray agree on
 // hit or miss, on the geom, and on the distance to 1e-5 m.
 TEST(RayScene, AgreesWithMjRayOnEveryRayOfAFractalScanWithRocks) {
