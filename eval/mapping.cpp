@@ -16,13 +16,15 @@ perception::LocusConfig locusConfig(const MapSpec& map, const SensorSpec& sensor
   return c;
 }
 
-MapBuild buildLocusMap(const perception::RangeImage& measured, const MapSpec& map, const SensorSpec& sensor) {
+MapBuild buildLocusMap(const perception::RangeImage& measured, const MapSpec& map, const SensorSpec& sensor,
+                       const perception::LocusConfig* config) {
   const auto t0 = std::chrono::steady_clock::now();
   MapBuild b;
   b.image = measured;
   if (sensor.ambiguity_m > 0) b.unwrapped = perception::unwrapRanges(b.image, sensor.ambiguity_m);
   if (map.shadows == "gnc") b.edges = perception::detectRangeEdges(b.image);
-  const perception::LocusMapper mapper(b.image, b.edges ? &*b.edges : nullptr, locusConfig(map, sensor));
+  const perception::LocusMapper mapper(b.image, b.edges ? &*b.edges : nullptr,
+                                       config ? *config : locusConfig(map, sensor));
   b.locus = mapper.map(mapGrid(map));
   b.locus_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return b;

@@ -22,8 +22,10 @@ struct MapBuild {
 perception::MapGrid mapGrid(const MapSpec& spec);
 perception::LocusConfig locusConfig(const MapSpec& map, const SensorSpec& sensor);
 
-// Unwraps, finds edges (if asked) and builds the locus map of `measured` on the spec's grid.
-MapBuild buildLocusMap(const perception::RangeImage& measured, const MapSpec& map, const SensorSpec& sensor);
+// Unwraps, finds edges (if asked) and builds the locus map of `measured` on the spec's grid, with
+// locusConfig(map, sensor) or, if given, `config`.
+MapBuild buildLocusMap(const perception::RangeImage& measured, const MapSpec& map, const SensorSpec& sensor,
+                       const perception::LocusConfig* config = nullptr);
 
 // The Cartesian baseline with the given gap filling on the same grid.
 perception::ElevationMap buildCartesianMap(const perception::RangeImage& image, const MapSpec& map,

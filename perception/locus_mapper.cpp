@@ -155,11 +155,13 @@ Eigen::Vector3d localNormal(const RangeImage& img, int r0, int c0, const Eigen::
 }
 
 // The variance of linear interpolation between samples of a rough surface, as a range error at
-// fraction f. Terrain is modelled as Brownian (fBm with H = ½) at the pixel scale: then
-// Var[interpolation error] = f(1−f)·σ²h, and σ²h = E[D²]/2 for the second difference
-// D = a(−1) − 2a(0) + a(+1), whose noise variance 6σ_p² is subtracted (docs/locus.md). The mean
-// of D² over the second differences centred on both samples and both sides of the cell.
-double roughnessVariance(const RangeImage& img, int r0, int c0, bool across_rows, double f, double var_pixel) {
+// fraction f. The surface between pixels is modelled as fractional Brownian motion with Hurst
+// exponent H: for samples h apart, Var[interpolation error] = σ²h^2H·g(f), with
+// g(f) = f^2H(1−f) + (1−f)^2H·f − f(1−f), and the second difference D = a(−1) − 2a(0) + a(+1) has
+// E[D²] = σ²h^2H·(4 − 2^2H) plus the noise's 6σ_p² (docs/locus.md). D² is averaged over the
+// second differences centred on both samples and both sides of the cell.
+double roughnessVariance(const RangeImage& img, int r0, int c0, bool across_rows, double f, double var_pixel,
+                         double hurst) {
   double sum = 0;
   int n = 0;
   for (int side = 0; side < 2; ++side)    // the two pixel lines bounding the cell
@@ -178,7 +180,9 @@ double roughnessVariance(const RangeImage& img, int r0, int c0, bool across_rows
       ++n;
     }
   if (n == 0) return 0.0;
-  return f * (1 - f) * 0.5 * std::max(0.0, sum / n - 6.0 * var_pixel);
+  const double h2 = 2 * hurst;
+  const double g = std::pow(f, h2) * (1 - f) + std::pow(1 - f, h2) * f - f * (1 - f);
+  return g / (4 - std::pow(2.0, h2)) * std::max(0.0, sum / n - 6.0 * var_pixel);
 }
 
 }  // namespace
@@ -193,8 +197,8 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, const double* w, double rho, 
   const double noise = config_.noise_k * rho * rho;
   const double var_pixel = noise * noise + config_.quantization_m * config_.quantization_m / 12.0;
   const double fr = w[2] + w[3], fc = w[1] + w[3];
-  const double rough = roughnessVariance(image_, r0, c0, true, fr, var_pixel) +
-                       roughnessVariance(image_, r0, c0, false, fc, var_pixel);
+  const double rough = !config_.roughness ? 0.0 : roughnessVariance(image_, r0, c0, true, fr, var_pixel, config_.roughness_hurst) +
+                       roughnessVariance(image_, r0, c0, false, fc, var_pixel, config_.roughness_hurst);
   const double var_rho = var_pixel * sum_w2 + rough;
   const Eigen::Vector3d n = localNormal(image_, r0, c0, up_);
   const Eigen::Vector3d d = p / rho;

@@ -20,6 +20,8 @@ struct LocusConfig {
   double noise_k = 3e-4;      // σ_ρ = k·ρ² of the sensor, for σ along the line
   double quantization_m = 0.0762;  // adds q²/12 to the range variance; 0 = none
   double z_margin_m = 1.0;    // lines are searched within the returns' bounds ± this margin
+  bool roughness = true;      // σ includes the surface's roughness between pixels (docs/locus.md)
+  double roughness_hurst = 0.7;  // H of the fBm assumed between pixels (0.5: Brownian)
 };
 
 struct LocusHit {
