@@ -76,9 +76,20 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   if (!(dphi_ > 0) || !(dtheta_ > 0) || !checkEven(image.phi, -dphi_) || !checkEven(image.theta, dtheta_))
     throw std::invalid_argument("LocusMapper: scan angles must be evenly spaced, φ falling, θ rising");
   up_ = T_SW_.linear() * Eigen::Vector3d::UnitZ();
+  // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1], 1024 steps; g is smooth).
+  const double h2 = 2 * config.roughness_hurst;
+  for (int i = 0; i <= 1024; ++i) {
+    const double f = i / 1024.0;
+    roughness_g_.push_back((std::pow(f, h2) * (1 - f) + std::pow(1 - f, h2) * f - f * (1 - f)) /
+                           (4 - std::pow(2.0, h2)));
+  }
   for (double phi : image.phi) {
     sin_phi_.push_back(std::sin(phi));
     cos_phi_.push_back(std::cos(phi));
+  }
+  for (double theta : image.theta) {
+    sin_theta_.push_back(std::sin(theta));
+    cos_theta_.push_back(std::cos(theta));
   }
   for (int r = 0; r < image.rows(); ++r)
     for (int c = 0; c < image.cols(); ++c)
@@ -102,7 +113,8 @@ Sample evaluate(const RangeImage& img, const EdgeMask* edges, double theta0, dou
   const Eigen::Vector3d p = a + out.s * b;
   if (p.y() * cp + p.z() * sp <= 0) return out;  // behind the sensor
   out.rho = p.norm();
-  out.theta = std::asin(std::clamp(p.x() / out.rho, -1.0, 1.0));
+  // Single precision is ample here (≈ 4e-8 rad, a few 1e-7 m of range) and asinf costs a third.
+  out.theta = std::asin(std::clamp(float(p.x() / out.rho), -1.0f, 1.0f));
   const double cf = (out.theta - theta0) / dtheta;
   const int rows = img.rows(), cols = img.cols();
   if (!(cf >= 0.0 && cf <= cols - 1) || !(rf >= 0.0 && rf <= rows - 1)) return out;
@@ -127,16 +139,25 @@ Sample evaluate(const RangeImage& img, const EdgeMask* edges, double theta0, dou
   return out;
 }
 
-// A surface point of the image in the sensor frame, if that pixel returned.
-bool pixelPoint(const RangeImage& img, int r, int c, Eigen::Vector3d& p) {
+// Sines and cosines of the scan angles, so eq. 1 needs no libm call per pixel.
+struct AngleTables {
+  const std::vector<double>& sin_phi;
+  const std::vector<double>& cos_phi;
+  const std::vector<double>& sin_theta;
+  const std::vector<double>& cos_theta;
+};
+
+// A surface point of the image in the sensor frame (eq. 1), if that pixel returned.
+bool pixelPoint(const RangeImage& img, const AngleTables& t, int r, int c, Eigen::Vector3d& p) {
   if (r < 0 || c < 0 || r >= img.rows() || c >= img.cols() || !img.valid(r, c)) return false;
-  p = img.pointSensor(r, c);
+  const double rho = img.range(r, c), ct = t.cos_theta[c];
+  p = Eigen::Vector3d(rho * t.sin_theta[c], rho * t.cos_phi[r] * ct, rho * t.sin_phi[r] * ct);
   return true;
 }
 
 // The local surface normal (sensor frame) around the 2×2 cell at (r0, c0), from the widest
 // returned span across it in each image direction (wider spans average out range noise).
-Eigen::Vector3d localNormal(const RangeImage& img, int r0, int c0, const Eigen::Vector3d& up) {
+Eigen::Vector3d localNormal(const RangeImage& img, const AngleTables& angles, int r0, int c0, const Eigen::Vector3d& up) {
   Eigen::Vector3d t[2];
   bool ok[2] = {false, false};
   for (int dir = 0; dir < 2; ++dir)
@@ -144,9 +165,9 @@ Eigen::Vector3d localNormal(const RangeImage& img, int r0, int c0, const Eigen::
       for (int k = 0; k < 2 && !ok[dir]; ++k) {
         Eigen::Vector3d p = Eigen::Vector3d::Zero(), q = Eigen::Vector3d::Zero();
         if (dir == 0)  // along the scanline (θ)
-          ok[dir] = pixelPoint(img, r0 + k, c0 - span / 2, p) && pixelPoint(img, r0 + k, c0 + 1 + (span + 1) / 2, q);
+          ok[dir] = pixelPoint(img, angles, r0 + k, c0 - span / 2, p) && pixelPoint(img, angles, r0 + k, c0 + 1 + (span + 1) / 2, q);
         else  // across scanlines (φ)
-          ok[dir] = pixelPoint(img, r0 - span / 2, c0 + k, p) && pixelPoint(img, r0 + 1 + (span + 1) / 2, c0 + k, q);
+          ok[dir] = pixelPoint(img, angles, r0 - span / 2, c0 + k, p) && pixelPoint(img, angles, r0 + 1 + (span + 1) / 2, c0 + k, q);
         if (ok[dir]) t[dir] = q - p;
       }
   if (!ok[0] || !ok[1]) return up;
@@ -161,7 +182,7 @@ Eigen::Vector3d localNormal(const RangeImage& img, int r0, int c0, const Eigen::
 // E[D²] = σ²h^2H·(4 − 2^2H) plus the noise's 6σ_p² (docs/locus.md). D² is averaged over the
 // second differences centred on both samples and both sides of the cell.
 double roughnessVariance(const RangeImage& img, int r0, int c0, bool across_rows, double f, double var_pixel,
-                         double hurst) {
+                         const std::vector<double>& g_table) {
   double sum = 0;
   int n = 0;
   for (int side = 0; side < 2; ++side)    // the two pixel lines bounding the cell
@@ -180,9 +201,10 @@ double roughnessVariance(const RangeImage& img, int r0, int c0, bool across_rows
       ++n;
     }
   if (n == 0) return 0.0;
-  const double h2 = 2 * hurst;
-  const double g = std::pow(f, h2) * (1 - f) + std::pow(1 - f, h2) * f - f * (1 - f);
-  return g / (4 - std::pow(2.0, h2)) * std::max(0.0, sum / n - 6.0 * var_pixel);
+  const double x = std::clamp(f, 0.0, 1.0) * double(g_table.size() - 1);
+  const std::size_t i = std::min(std::size_t(x), g_table.size() - 2);
+  const double g = g_table[i] + (x - double(i)) * (g_table[i + 1] - g_table[i]);
+  return g * std::max(0.0, sum / n - 6.0 * var_pixel);
 }
 
 }  // namespace
@@ -197,106 +219,182 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, const double* w, double rho, 
   const double noise = config_.noise_k * rho * rho;
   const double var_pixel = noise * noise + config_.quantization_m * config_.quantization_m / 12.0;
   const double fr = w[2] + w[3], fc = w[1] + w[3];
-  const double rough = !config_.roughness ? 0.0 : roughnessVariance(image_, r0, c0, true, fr, var_pixel, config_.roughness_hurst) +
-                       roughnessVariance(image_, r0, c0, false, fc, var_pixel, config_.roughness_hurst);
+  const double rough = !config_.roughness ? 0.0
+                                           : roughnessVariance(image_, r0, c0, true, fr, var_pixel, roughness_g_) +
+                                                 roughnessVariance(image_, r0, c0, false, fc, var_pixel, roughness_g_);
   const double var_rho = var_pixel * sum_w2 + rough;
-  const Eigen::Vector3d n = localNormal(image_, r0, c0, up_);
+  const Eigen::Vector3d n = localNormal(image_, {sin_phi_, cos_phi_, sin_theta_, cos_theta_}, r0, c0, up_);
   const Eigen::Vector3d d = p / rho;
   return std::sqrt(var_rho) * std::abs(d.dot(n)) / std::max(std::abs(b.dot(n)), 0.05);
 }
 
 LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
-  LocusHit hit;
-  double s_lo, s_hi;
-  if (bounds_.isEmpty() || !clipToBox(bounds_, u, v, s_lo, s_hi)) return hit;
-  const Eigen::Vector3d a = T_SW_ * u, b = T_SW_.linear() * v;
-  // Scan angles of the segment's ends; φ(s) is monotonic along a line.
-  const Eigen::Vector3d top = a + s_hi * b, bottom = a + s_lo * b;
-  const double rf_top = (phi0_ - std::atan2(top.z(), top.y())) / dphi_;
-  const double rf_bottom = (phi0_ - std::atan2(bottom.z(), bottom.y())) / dphi_;
-  const int rows = image_.rows();
-  const int step = rf_bottom >= rf_top ? 1 : -1;
-  int r = step > 0 ? int(std::ceil(rf_top)) : int(std::floor(rf_top));
-  const int r_end = step > 0 ? int(std::floor(rf_bottom)) : int(std::ceil(rf_bottom));
-  if (step > 0) r = std::max(r, 0);
-  else r = std::min(r, rows - 1);
+  return intersect(u, v, nullptr);
+}
 
-  // Stage 1: the two scanlines between which Δ turns from negative (the line in front of the
-  // surface) to non-negative (behind it), walking down the line from its top.
-  Sample prev;
-  int prev_row = -1;
-  for (; step > 0 ? (r <= r_end && r < rows) : (r >= r_end && r >= 0); r += step) {
-    const Sample cur = evaluate(image_, edges_, theta0_, dtheta_, r, sin_phi_[r], cos_phi_[r], a, b);
+// sin and cos of φ_r − δ for |δ| within a scanline (≤ 0.01 rad): angle addition with Taylor series
+// of sin δ and cos δ to δ⁵ and δ⁶ (error < 1e-16), cheaper than a libm call per evaluation.
+static void sinCosNear(double sr, double cr, double delta, double& sp, double& cp) {
+  const double d2 = delta * delta;
+  const double sd = delta * (1 - d2 / 6 * (1 - d2 / 20));
+  const double cd = 1 - d2 / 2 * (1 - d2 / 12 * (1 - d2 / 30));
+  sp = sr * cd - cr * sd;
+  cp = cr * cd + sr * sd;
+}
+
+LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v, int* hint) const {
+  LocusHit hit;
+  const Eigen::Vector3d a = T_SW_ * u, b = T_SW_.linear() * v;
+  const int rows = image_.rows();
+  auto at = [&](int r) {
     ++hit.evaluations;
-    if (!cur.valid) {
-      prev_row = -1;  // a gap (no return, out of view) is never bridged
-      continue;
+    return evaluate(image_, edges_, theta0_, dtheta_, r, sin_phi_[r], cos_phi_[r], a, b);
+  };
+
+  // Stage 1: two neighbouring scanlines between which Δ turns from negative (the line in front of
+  // the surface) to non-negative (behind it). Along a line pointing up out of 2.5-D terrain, Δ
+  // changes sign once: every point below the visible surface point is underground or hidden. So
+  // a neighbouring cell's bracket (the hint) is the place to start, and any (−, +) pair of
+  // consecutive scanlines is the crossing; without a hint, or when the hint's neighbourhood has
+  // gaps, the walk goes down the line from its top (the paper's first stage).
+  int r1 = -1, r2 = -1;
+  Sample s1, s2;
+  if (hint && *hint >= 0 && *hint + 1 < rows) {
+    int r = *hint;
+    Sample up = at(r), down = at(r + 1);
+    int step = 0;
+    if (up.valid && down.valid) {
+      if (up.delta < 0 && down.delta >= 0) r1 = r, r2 = r + 1, s1 = up, s2 = down;
+      else step = down.delta < 0 ? 1 : -1;  // the crossing is further down the image, or up
     }
-    if (prev_row >= 0 && prev.delta < 0 && cur.delta >= 0) {
-      // Stage 2: search between the two scanlines until the bracket in φ is below ε.
-      double phi1 = image_.phi[prev_row], phi2 = image_.phi[r];
-      double d1 = prev.delta, d2 = cur.delta;
-      bool edge = prev.edge || cur.edge;
-      Sample last = cur;
-      int kept_side = 0;
-      for (int it = 0; it < 200 && std::abs(phi2 - phi1) >= config_.epsilon_rad && d2 != 0.0; ++it) {
-        double phi = 0.5 * (phi1 + phi2);
-        if (!config_.bisection) {
-          const double secant = phi1 - d1 * (phi2 - phi1) / (d2 - d1);
-          const double lo = std::min(phi1, phi2), hi = std::max(phi1, phi2);
-          if (secant > lo && secant < hi) phi = secant;
-        }
-        const Sample m = evaluate(image_, edges_, theta0_, dtheta_, (phi0_ - phi) / dphi_, std::sin(phi),
-                                  std::cos(phi), a, b);
-        ++hit.evaluations;
-        if (!m.valid) return hit;  // the bracket reaches a pixel without a return: unknown
-        edge = edge || m.edge;
-        last = m;
-        if (m.delta < 0) {
-          phi1 = phi, d1 = m.delta;
-          if (kept_side == -1) d2 *= 0.5;  // Illinois: the far end stayed twice, halve it
-          kept_side = -1;
-        } else {
-          phi2 = phi, d2 = m.delta;
-          if (kept_side == 1) d1 *= 0.5;
-          kept_side = 1;
-        }
+    for (int k = 0; step != 0 && r1 < 0 && k < rows; ++k) {
+      if (step > 0) {
+        if (r + 2 >= rows) break;
+        ++r, up = down, down = at(r + 1);
+      } else {
+        if (r - 1 < 0) break;
+        --r, down = up, up = at(r);
       }
-      if (edge) {
-        hit.state = CellState::Shadow;  // the locus meets the image at an occluding edge
-        return hit;
-      }
-      // The root of the final bracket's chord (its midpoint under plain bisection).
-      const double phi = config_.bisection || d2 == d1 ? 0.5 * (phi1 + phi2)
-                                                       : phi1 - d1 * (phi2 - phi1) / (d2 - d1);
-      const Sample f = evaluate(image_, edges_, theta0_, dtheta_, (phi0_ - phi) / dphi_, std::sin(phi),
-                                std::cos(phi), a, b);
-      const Sample& at = f.valid ? f : last;
-      hit.state = CellState::Known;
-      hit.s = at.s;
-      hit.point = u + at.s * v;
-      hit.phi = phi;
-      hit.theta = at.theta;
-      hit.rho = at.rho;
-      hit.sigma = sigmaAlongLine(at.r0, at.c0, at.w, at.rho, a + at.s * b, b);
-      return hit;
+      if (!up.valid || !down.valid) break;
+      if (up.delta < 0 && down.delta >= 0) r1 = r, r2 = r + 1, s1 = up, s2 = down;
     }
-    prev = cur;
-    prev_row = r;
   }
+  if (r1 < 0) {
+    double s_lo, s_hi;
+    if (bounds_.isEmpty() || !clipToBox(bounds_, u, v, s_lo, s_hi)) return hit;
+    // Scan angles of the segment's ends; φ(s) is monotonic along a line.
+    const Eigen::Vector3d top = a + s_hi * b, bottom = a + s_lo * b;
+    // A line wholly to one side of the field of view meets no pixel: θ = asin(x/ρ) of both ends
+    // beyond the same image edge (θ is monotonic along the segment's projection too).
+    const double t_top = std::asin(top.x() / top.norm()), t_bottom = std::asin(bottom.x() / bottom.norm());
+    const double t_last = theta0_ + dtheta_ * (image_.cols() - 1);
+    if ((t_top < theta0_ && t_bottom < theta0_) || (t_top > t_last && t_bottom > t_last)) return hit;
+    const double rf_top = (phi0_ - std::atan2(top.z(), top.y())) / dphi_;
+    const double rf_bottom = (phi0_ - std::atan2(bottom.z(), bottom.y())) / dphi_;
+    const int step = rf_bottom >= rf_top ? 1 : -1;
+    int r = step > 0 ? std::max(int(std::ceil(rf_top)), 0) : std::min(int(std::floor(rf_top)), rows - 1);
+    const int r_end = step > 0 ? int(std::floor(rf_bottom)) : int(std::ceil(rf_bottom));
+    Sample prev;
+    int prev_row = -1;
+    for (; step > 0 ? (r <= r_end && r < rows) : (r >= r_end && r >= 0); r += step) {
+      const Sample cur = at(r);
+      if (!cur.valid) {
+        prev_row = -1;  // a gap (no return, out of view) is never bridged
+        continue;
+      }
+      if (cur.delta >= 0) {
+        // Below its first point behind the surface, a line stays behind it (single crossing):
+        // either the scanline above brackets the crossing, or the line has no visible point.
+        if (prev_row >= 0 && prev.delta < 0) r1 = prev_row, r2 = r, s1 = prev, s2 = cur;
+        break;
+      }
+      prev = cur;
+      prev_row = r;
+    }
+    if (r1 < 0) return hit;
+  }
+  if (hint) *hint = std::min(r1, r2);
+
+  // Stage 2: search between the two scanlines until the bracket in φ is below ε.
+  const double phi_r1 = image_.phi[r1];
+  double phi1 = phi_r1, phi2 = image_.phi[r2];
+  double d1 = s1.delta, d2 = s2.delta;
+  bool edge = s1.edge || s2.edge;
+  Sample last = s2;
+  int kept_side = 0;
+  auto evalPhi = [&](double phi) {
+    double sp, cp;
+    sinCosNear(sin_phi_[r1], cos_phi_[r1], phi_r1 - phi, sp, cp);
+    ++hit.evaluations;
+    return evaluate(image_, edges_, theta0_, dtheta_, (phi0_ - phi) / dphi_, sp, cp, a, b);
+  };
+  auto take = [&](double phi, const Sample& m) {  // narrow the bracket to the side m is on
+    edge = edge || m.edge;
+    last = m;
+    if (m.delta < 0) {
+      phi1 = phi, d1 = m.delta;
+      if (kept_side == -1) d2 *= 0.5;  // Illinois: the far end stayed twice, halve it
+      kept_side = -1;
+    } else {
+      phi2 = phi, d2 = m.delta;
+      if (kept_side == 1) d1 *= 0.5;
+      kept_side = 1;
+    }
+  };
+  const double eps = config_.epsilon_rad;
+  for (int it = 0; it < 200 && std::abs(phi2 - phi1) >= eps && d2 != 0.0; ++it) {
+    double phi = 0.5 * (phi1 + phi2);
+    if (!config_.bisection) {
+      const double secant = phi1 - d1 * (phi2 - phi1) / (d2 - d1);
+      const double lo = std::min(phi1, phi2), hi = std::max(phi1, phi2);
+      if (secant > lo && secant < hi) phi = secant;
+    }
+    const Sample m = evalPhi(phi);
+    if (!m.valid) return hit;  // the bracket reaches a pixel without a return: unknown
+    take(phi, m);
+    // Within a pixel cell Δ(φ) is nearly linear, so a secant step lands within ε of the root:
+    // probe ε/2 to its far side, and the bracket closes to below ε in one more evaluation.
+    if (!config_.bisection && std::abs(phi2 - phi1) >= eps) {
+      const double toward = m.delta < 0 ? phi2 : phi1;
+      const double probe = phi + std::copysign(0.499 * eps, toward - phi);
+      if ((probe - phi1) * (probe - phi2) < 0) {
+        const Sample q = evalPhi(probe);
+        if (!q.valid) return hit;
+        take(probe, q);
+      }
+    }
+  }
+  if (edge) {
+    hit.state = CellState::Shadow;  // the locus meets the image at an occluding edge
+    return hit;
+  }
+  // The root of the final bracket's chord (its midpoint under plain bisection).
+  const double phi =
+      config_.bisection || d2 == d1 ? 0.5 * (phi1 + phi2) : phi1 - d1 * (phi2 - phi1) / (d2 - d1);
+  const Sample f = evalPhi(phi);
+  const Sample& fin = f.valid ? f : last;
+  hit.state = CellState::Known;
+  hit.s = fin.s;
+  hit.point = u + fin.s * v;
+  hit.phi = phi;
+  hit.theta = fin.theta;
+  hit.rho = fin.rho;
+  hit.sigma = sigmaAlongLine(fin.r0, fin.c0, fin.w, fin.rho, a + fin.s * b, b);
   return hit;
 }
 
 ElevationMap LocusMapper::map(const MapGrid& grid) const {
   ElevationMap out(grid);
   tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& rows) {
-    for (int r = rows.begin(); r != rows.end(); ++r)
+    for (int r = rows.begin(); r != rows.end(); ++r) {
+      int hint = -1;  // the previous cell's scanline: neighbours cross the image close together
       for (int c = 0; c < grid.cols; ++c) {
         const Eigen::Vector2d xy = grid.center(r, c);
-        const LocusHit hit = elevationAt(xy.x(), xy.y());
+        const LocusHit hit = intersect({xy.x(), xy.y(), 0.0}, Eigen::Vector3d::UnitZ(), &hint);
         if (hit.state == CellState::Known) out.setKnown(r, c, float(hit.point.z()), float(hit.sigma));
         else out.setUnknown(r, c, hit.state);
       }
+    }
   });
   return out;
 }

@@ -56,6 +56,9 @@ class LocusMapper {
   ElevationMap mapPolygon(const std::vector<Eigen::Vector2d>& polygon, double cell_m) const;
 
  private:
+  // The same, starting the scanline search at *hint (a neighbouring line's crossing) and
+  // updating it; hint may be null.
+  LocusHit intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v, int* hint) const;
   double sigmaAlongLine(int r0, int c0, const double* w, double rho, const Eigen::Vector3d& p,
                         const Eigen::Vector3d& b) const;
 
@@ -64,8 +67,9 @@ class LocusMapper {
   LocusConfig config_;
   Eigen::Isometry3d T_SW_;
   Eigen::Vector3d up_;  // world z in the sensor frame
+  std::vector<double> roughness_g_;  // the fBm interpolation factor, tabulated over f
   double phi0_, dphi_, theta0_, dtheta_;
-  std::vector<double> sin_phi_, cos_phi_;
+  std::vector<double> sin_phi_, cos_phi_, sin_theta_, cos_theta_;
   Eigen::AlignedBox3d bounds_;  // world bounds of the returns, ± margin
 };
 
