@@ -1,4 +1,4 @@
-// The ambler command line: run a scenario, sweep scenarios, run benchmarks.
+// The ambler command line: run a scenario, sweep scenarios, run experiments and benchmarks.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -6,6 +6,7 @@
 #include <iostream>
 
 #include "eval/bench.hpp"
+#include "eval/experiment.hpp"
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
 #include "eval/sweep.hpp"
@@ -61,6 +62,26 @@ int main(int argc, char** argv) {
   bench_map->add_option("--reps", bench_map_opt.repetitions, "Repetitions per measurement (median reported)")
       ->check(CLI::Range(1, 1000));
 
+  auto* experiment = app.add_subcommand("experiment", "Run one of the paper's experiments as sweeps; prints its "
+                                                      "markdown tables (see docs/experiments/).");
+  experiment->require_subcommand(1);
+  ExperimentOptions exp_opt;
+  std::string exp_out, exp_sweeps = exp_opt.sweeps.string();
+  bool exp_quiet = false;
+  auto* locus_vs_cartesian = experiment->add_subcommand(
+      "locus-vs-cartesian", "Locus map vs Cartesian baseline across tilt, noise and map resolution (§6): "
+                            "DIR/table.md, DIR/*.png and each sweep's DIR/<sweep>/results.csv.");
+  locus_vs_cartesian->add_option("--out,-o", exp_out, "Experiment directory to write (created if missing)")
+      ->required();
+  locus_vs_cartesian->add_flag("--quick", exp_opt.quick,
+                               "A reduced run: the first and last value of every axis, the first seed");
+  locus_vs_cartesian->add_option("--sweeps", exp_sweeps, "Directory of tilt_noise.yaml and resolution.yaml")
+      ->capture_default_str();
+  locus_vs_cartesian->add_option("--jobs,-j", exp_opt.jobs, "Scenarios run at once (each already uses every core)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  locus_vs_cartesian->add_flag("--quiet,-q", exp_quiet, "No progress lines on stderr");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -84,6 +105,11 @@ int main(int argc, char** argv) {
         mergeSweep(sw, sweep_out, !sweep_quiet);
       else
         runSweep(sw, opt);
+    } else if (*locus_vs_cartesian) {
+      exp_opt.out = exp_out;
+      exp_opt.sweeps = exp_sweeps;
+      exp_opt.progress = !exp_quiet;
+      std::fputs(runLocusVsCartesian(exp_opt).c_str(), stdout);
     } else if (*bench_scan) {
       bench_opt.json = bench_json;
       benchScan(bench_opt);

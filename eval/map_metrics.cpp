@@ -29,10 +29,40 @@ nlohmann::ordered_json number(double v) {
   return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
 }
 
+// The sums of one range band while the cells are scanned.
+struct BandSums {
+  long visible = 0, known = 0, covered = 0, with_sigma = 0, in1 = 0;
+  double sum2 = 0;
+  std::vector<double> abs_err;
+};
+
+// The band of a cell whose true surface point is `range` m from the sensor.
+std::size_t bandOf(double range) {
+  std::size_t b = 0;
+  while (b + 2 < kRangeBandEdgesM.size() && range >= kRangeBandEdgesM[b + 1]) ++b;
+  return b;
+}
+
+nlohmann::ordered_json bandsJson(const std::vector<BandMetrics>& bands) {
+  auto out = nlohmann::ordered_json::array();
+  for (const auto& b : bands) {
+    nlohmann::ordered_json j;
+    j["range_m"] = {b.lo_m, number(b.hi_m)};
+    j["visible"] = b.visible;
+    j["known"] = b.known;
+    j["coverage"] = number(b.coverage);
+    j["rms_error_m"] = number(b.rms_error_m);
+    j["median_abs_error_m"] = number(b.median_abs_error_m);
+    j["within_1sigma"] = number(b.within_1sigma);
+    out.push_back(std::move(j));
+  }
+  return out;
+}
+
 }  // namespace
 
 MapMetrics mapMetrics(const perception::ElevationMap& map, const sim::ElevationRaster& truth,
-                      const sim::VisibilityRaster& visibility) {
+                      const sim::VisibilityRaster& visibility, const Eigen::Vector3d* sensor_xyz) {
   const auto& grid = map.grid();
   const auto same = [&](const auto& m) { return m.rows() == grid.rows && m.cols() == grid.cols; };
   if (!same(map.elevation()) || !same(map.sigma()) || !same(map.state()) || !same(truth) ||
@@ -45,11 +75,20 @@ MapMetrics mapMetrics(const perception::ElevationMap& map, const sim::ElevationR
   long covered = 0, shadow_hit = 0, with_sigma = 0, in1 = 0, in2 = 0;
   double sum2 = 0;
   std::vector<double> abs_err;
+  std::vector<BandSums> bands(sensor_xyz ? kRangeBandEdgesM.size() - 1 : 0);
   for (int r = 0; r < grid.rows; ++r)
     for (int c = 0; c < grid.cols; ++c) {
       const auto state = map.stateAt(r, c);
       const auto vis = sim::Visibility(visibility(r, c));
       const bool known = state == CellState::Known;
+      BandSums* band = nullptr;
+      if (sensor_xyz && std::isfinite(truth(r, c))) {
+        const Eigen::Vector2d xy = grid.center(r, c);
+        band = &bands[bandOf((Eigen::Vector3d(xy.x(), xy.y(), double(truth(r, c))) - *sensor_xyz).norm())];
+        band->visible += vis == sim::Visibility::Visible;
+        band->known += known;
+        band->covered += known && vis == sim::Visibility::Visible;
+      }
       m.known += known;
       m.shadow += state == CellState::Shadow;
       m.visible += vis == sim::Visibility::Visible;
@@ -60,12 +99,20 @@ MapMetrics mapMetrics(const perception::ElevationMap& map, const sim::ElevationR
       const double e = double(map.elevation()(r, c)) - double(truth(r, c));
       sum2 += e * e;
       abs_err.push_back(std::abs(e));
+      if (band) {
+        band->sum2 += e * e;
+        band->abs_err.push_back(std::abs(e));
+      }
       const double sigma = map.sigma()(r, c);
       if (!std::isfinite(sigma)) continue;
       ++with_sigma;
       in1 += std::abs(e) <= sigma;
       in2 += std::abs(e) <= 2 * sigma;
       m.known_in_shadow_above_3sigma += vis == sim::Visibility::Hidden && std::abs(e) > 3 * sigma;
+      if (band) {
+        ++band->with_sigma;
+        band->in1 += std::abs(e) <= sigma;
+      }
     }
   m.compared = long(abs_err.size());
   m.coverage = ratio(covered, m.visible);
@@ -81,6 +128,24 @@ MapMetrics mapMetrics(const perception::ElevationMap& map, const sim::ElevationR
     m.median_abs_error_m = quantile(abs_err, 0.5);
     m.p95_abs_error_m = quantile(abs_err, 0.95);
     m.max_abs_error_m = abs_err.back();
+  }
+  for (std::size_t i = 0; i < bands.size(); ++i) {
+    BandSums& s = bands[i];
+    BandMetrics b;
+    b.lo_m = kRangeBandEdgesM[i];
+    b.hi_m = kRangeBandEdgesM[i + 1];
+    b.visible = s.visible;
+    b.known = s.known;
+    b.coverage = ratio(s.covered, s.visible);
+    b.within_1sigma = ratio(s.in1, s.with_sigma);
+    if (s.abs_err.empty()) {
+      b.rms_error_m = b.median_abs_error_m = kNaN;
+    } else {
+      std::sort(s.abs_err.begin(), s.abs_err.end());
+      b.rms_error_m = std::sqrt(s.sum2 / double(s.abs_err.size()));
+      b.median_abs_error_m = quantile(s.abs_err, 0.5);
+    }
+    m.bands.push_back(b);
   }
   return m;
 }
@@ -104,6 +169,7 @@ nlohmann::ordered_json toJson(const MapMetrics& m, int view) {
   j["visible"] = m.visible;
   j["hidden"] = m.hidden;
   j["compared"] = m.compared;
+  if (!m.bands.empty()) j["by_range"] = bandsJson(m.bands);
   return j;
 }
 
@@ -120,6 +186,7 @@ nlohmann::ordered_json cartesianJson(const MapMetrics& m, int view) {
   j["within_1sigma"] = number(m.within_1sigma);
   j["within_2sigma"] = number(m.within_2sigma);
   j["compared"] = m.compared;
+  if (!m.bands.empty()) j["by_range"] = bandsJson(m.bands);
   return j;
 }
 

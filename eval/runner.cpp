@@ -78,7 +78,8 @@ void mapView(const Scenario& sc, int k, const sim::Scan& scan, const sim::Ground
   const sim::VisibilityRaster vis = truth.visibility(grid, z_true, scan.image.T_WS, cfg);
   const MapBuild build = buildLocusMap(scan.image, spec, sc.sensor);
   map_s += build.locus_seconds;
-  const MapMetrics m = mapMetrics(build.locus, z_true, vis);
+  const Eigen::Vector3d sensor_position = scan.image.T_WS.translation();
+  const MapMetrics m = mapMetrics(build.locus, z_true, vis, &sensor_position);
   metrics["map"].push_back(toJson(m, k));
   writeMapFiles(out / "maps", viewName(k), build.locus, &z_true, sc.name + ": " + viewName(k) + " locus map");
   char line[200];
@@ -97,7 +98,7 @@ void mapView(const Scenario& sc, int k, const sim::Scan& scan, const sim::Ground
   for (const auto& [fill, name] : {std::pair{perception::GapFill::Nearest, "nearest"},
                                    std::pair{perception::GapFill::Linear, "linear"}}) {
     perception::ElevationMap cart = buildCartesianMap(build.image, spec, fill);
-    const MapMetrics cm = mapMetrics(cart, z_true, vis);
+    const MapMetrics cm = mapMetrics(cart, z_true, vis, &sensor_position);
     if (!best_m || cm.rms_error_m < best_m->rms_error_m) best.emplace(std::move(cart)), best_m = cm, best_fill = name;
   }
   cartesian_s += t_cart.seconds() / 2;  // per baseline map

@@ -629,6 +629,10 @@ Sweep parseSweep(const std::string& yaml_text, const fs::path& file) {
 
 Sweep loadSweep(const fs::path& file) { return parseSweep(readText(file, file.string()), file); }
 
+std::optional<std::vector<std::vector<std::string>>> parseResultsCsv(const std::string& text) {
+  return parseCsv(text);
+}
+
 Shard parseShard(const std::string& text) {
   const auto parts = split(text, '/');
   Shard s;

@@ -76,4 +76,8 @@ std::filesystem::path runSweep(const Sweep& sweep, const SweepOptions& options);
 // sweep file.
 std::filesystem::path mergeSweep(const Sweep& sweep, const std::filesystem::path& out, bool progress = true);
 
+// The records of a results.csv (RFC 4180; the reader `--merge` uses), header first; nullopt when a
+// quote is left open or stray.
+std::optional<std::vector<std::vector<std::string>>> parseResultsCsv(const std::string& text);
+
 }  // namespace ambler::eval

@@ -57,7 +57,7 @@ bool insidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector
 // One evaluation of Δ = ρ_l − I at a scan angle: where it looked and with what weights.
 struct Sample {
   bool valid = false;   // the line is in front of the sensor, inside the image, all pixels returned
-  bool edge = false;    // one of the pixels used is an occluding-edge pixel
+  unsigned edges = 0;   // bit k: pixel k (of the 2×2 cell, weighted) is an occluding-edge pixel
   double delta = 0, s = 0, rho = 0, theta = 0;
   int r0 = 0, c0 = 0;   // the top-left pixel of the 2×2 cell
   double w[4] = {0, 0, 0, 0};  // bilinear weights of (r0,c0), (r0,c0+1), (r0+1,c0), (r0+1,c0+1)
@@ -132,7 +132,7 @@ Sample evaluate(const RangeImage& img, const EdgeMask* edges, double theta0, dou
     const float range = img.range(r, c);
     if (!std::isfinite(range)) return out;  // never bridge a pixel that returned nothing
     I += out.w[k] * range;
-    if (edges && (*edges)(r, c)) out.edge = true;
+    if (edges && (*edges)(r, c)) out.edges |= 1u << k;
   }
   out.delta = out.rho - I;
   out.valid = true;
@@ -319,7 +319,11 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
   const double phi_r1 = image_.phi[r1];
   double phi1 = phi_r1, phi2 = image_.phi[r2];
   double d1 = s1.delta, d2 = s2.delta;
-  bool edge = s1.edge || s2.edge;
+  // The crossing is at an occluding edge when edge pixels lie on both sides of it — on both
+  // scanlines of the bracket, or in both columns of the final cell. Edge pixels come in pairs
+  // across a discontinuity, so a visible point beside one (on a ledge's lip) has edge pixels on
+  // one side only and stays known.
+  const bool row1_edge = s1.edges != 0, row2_edge = s2.edges != 0;
   Sample last = s2;
   int kept_side = 0;
   auto evalPhi = [&](double phi) {
@@ -329,7 +333,6 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
     return evaluate(image_, edges_, theta0_, dtheta_, (phi0_ - phi) / dphi_, sp, cp, a, b);
   };
   auto take = [&](double phi, const Sample& m) {  // narrow the bracket to the side m is on
-    edge = edge || m.edge;
     last = m;
     if (m.delta < 0) {
       phi1 = phi, d1 = m.delta;
@@ -364,7 +367,22 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
       }
     }
   }
-  if (edge) {
+  // Which way the final cell's discontinuity runs: edge pixels mark both sides of a break but not
+  // its direction, so compare the cell's largest range jump across scanlines with that across
+  // columns.
+  const unsigned e = last.edges;
+  double jump_rows = 0, jump_cols = 0;
+  if (e) {
+    const auto rng = [&](int k) { return double(image_.range(last.r0 + k / 2, last.c0 + k % 2)); };
+    if (image_.valid(last.r0, last.c0) && image_.valid(last.r0, last.c0 + 1) &&
+        image_.valid(last.r0 + 1, last.c0) && image_.valid(last.r0 + 1, last.c0 + 1)) {
+      jump_rows = std::max(std::abs(rng(0) - rng(2)), std::abs(rng(1) - rng(3)));
+      jump_cols = std::max(std::abs(rng(0) - rng(1)), std::abs(rng(2) - rng(3)));
+    }
+  }
+  const bool across_rows = (row1_edge && row2_edge) || ((e & 3u) && (e & 12u) && jump_rows >= jump_cols);
+  const bool across_cols = (e & 5u) && (e & 10u) && jump_cols > jump_rows;
+  if (across_rows || across_cols) {
     hit.state = CellState::Shadow;  // the locus meets the image at an occluding edge
     return hit;
   }

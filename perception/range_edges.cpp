@@ -6,32 +6,38 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace ambler::perception {
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-// Over-relaxation of the SOR sweeps (Blake & Zisserman's update f ← f − ω·∂E/∂f / T).
+// Over-relaxation of the SOR sweeps (Blake & Zisserman's update f ← f − ω·(∂E/∂f)/T).
 constexpr float kOmega = 1.5f;
 // Below this many pixels a pass runs on one thread: TBB's scheduling would cost more than it saves.
 constexpr long kSerialPixels = 1L << 15;
-// Unwrapping accepts a fold when the candidate is within this many σ of the prediction.
+// Unwrapping: a fold continues a surface when the candidate is within this many σ of the
+// prediction; across a depth discontinuity it is accepted when the range changes by at most this
+// factor (seen from a height h over an obstacle of height H, an occlusion multiplies the range
+// by h/(h − H): 1.5 for a 1 m rock under a 3 m mast) and exactly one candidate does.
 constexpr double kUnwrapSigmas = 5.0;
+constexpr double kUnwrapJumpRatio = 1.5;
 
-// Runs body(begin, end) over [0, n) rows, in parallel for large images.
+// Runs body(begin, end) over the rows [0, n), in parallel for large images.
 template <class Body>
 void forRows(int n, long pixels, const Body& body) {
   if (pixels < kSerialPixels) {
     body(0, n);
     return;
   }
-  tbb::parallel_for(tbb::blocked_range<int>(0, n, 8),
+  tbb::parallel_for(tbb::blocked_range<int>(0, n, 4),
                     [&](const tbb::blocked_range<int>& b) { body(b.begin(), b.end()); });
 }
 
-// Median of five by Devillard's seven compare-exchanges (branch-free, so rows of it vectorise).
+// Median of five by Devillard's seven compare-exchanges (branch-free).
 inline void sort2(float& a, float& b) {
   const float lo = std::min(a, b);
   b = std::max(a, b);
@@ -42,20 +48,20 @@ inline float median5(float a, float b, float c, float d, float e) {
   return c;
 }
 
-// A link's rest difference. The trend s is the median of its own first difference of u and the
-// two either side along the same scanline (a missing neighbour — border, invalid pixel — is
-// replaced by its mirror image about the link, or by the link itself, so the window stays
+// A link's rest difference, from the first differences of u along its scanline: its own, x, and
+// two either side, (a, b) before and (e, g) after, NaN where missing. The trend s is their median
+// (a missing one replaced by its mirror image about the link, or by x, so the window stays
 // centred). On a plane u = n·d/c is linear in the beam direction and its differences vary slowly,
 // so the median follows them; a jump is one outlier among five (a mixed pixel splits it in two),
 // so the trend ignores it and the jump stands out in full. An occlusion makes the range change
 // faster than the surface does (towards grazing), never slower: a difference between the trend
 // and 0 (a face turned towards the sensor, e.g. a rock's front between ground and top) is smooth
-// surface, so the rest difference is the data's own difference clamped to [0, s].
+// surface, so the rest difference is x clamped to [0, s].
 inline float restDifference(float a, float b, float x, float e, float g) {
   const float b2 = b == b ? b : (e == e ? e : x), e2 = e == e ? e : (b == b ? b : x);
   const float a2 = a == a ? a : (g == g ? g : x), g2 = g == g ? g : (a == a ? a : x);
   const float s = median5(a2, b2, x, e2, g2);
-  return std::clamp(x, std::min(s, 0.0f), std::max(s, 0.0f));
+  return std::min(std::max(x, std::min(s, 0.0f)), std::max(s, 0.0f));
 }
 
 // B&Z's g^(p) for the membrane (c = c*/p, c* = 1/2): λ²t² up to q, then α − c(|t| − r)²/2 up to
@@ -69,44 +75,143 @@ struct Penalty {
     two_l2 = float(2 * lambda * lambda), q = float(alpha / (lambda * lambda * rr)), r = float(rr);
     c = float(cc);
   }
+  // Below q the quadratic branch 2λ²|t| is the smaller, above q the concave one c(r − |t|) (they
+  // meet at q), and beyond r the slope is 0: one min and one max, no branch, so sweeps vectorise.
   float deriv(float t) const {
     const float a = std::abs(t);
-    const float v = a < q ? two_l2 * a : (a < r ? c * (r - a) : 0.0f);
-    return std::copysign(v, t);
+    return std::copysign(std::min(two_l2 * a, std::max(c * (r - a), 0.0f)), t);
   }
 };
 
-// The membrane on inverse range u = 1/ρ, on a padded grid (one ring of empty pixels, so no pixel
-// needs a border test). Link "right" of pixel i joins i and i+1, link "down" joins i and i+w; a
-// link's k is 1/σ_u there (0: no link), so τ = k·(f_j − f_i − s) is its excess in units of the noise.
-struct Membrane {
-  int rows, cols, w;
-  std::vector<float> u, f, weight, inv_t, s_right, k_right, s_down, k_down;
+// The noise of u = 1/ρ: σ_u = σ(ρ)/ρ² = σ_q·u² + k.
+struct NoiseU {
+  float sq, k;
+  float sigma(float u) const { return sq * u * u + k; }
+};
 
-  Membrane(int rows_, int cols_) : rows(rows_), cols(cols_), w(cols_ + 2) {
-    const std::size_t n = std::size_t(rows + 2) * w;
-    for (auto* v : {&u, &f, &weight, &inv_t, &s_right, &k_right, &s_down, &k_down}) v->assign(n, 0.0f);
+// B&Z's SOR step f ← f − ω·(∂E/∂f)/T on n pixels `fo` of one colour: the data term (f − u)²/σ_u²,
+// and per link (right, left, down, up) the neighbour f, the rest difference s and k. T bounds
+// ∂²E/∂f²: 2/σ_u² from the data, 2λ²k² from each link. The pointers are restrict parameters (the
+// runs never overlap) so that the loop vectorises without alias checks.
+void sorRun(float* __restrict fo, const float* __restrict fr, const float* __restrict fl,
+            const float* __restrict fd, const float* __restrict fu, const float* __restrict u,
+            const float* __restrict sr, const float* __restrict kr, const float* __restrict sl,
+            const float* __restrict kl, const float* __restrict sd, const float* __restrict kd,
+            const float* __restrict su, const float* __restrict ku, int n, const NoiseU noise,
+            const Penalty g) {
+  for (int j = 0; j < n; ++j) {
+    // A pixel without data has u = 0 and only links with k = 0, so its f stays 0; its σ is offset
+    // by 1 so that nothing divides by 0.
+    const float sigma = noise.sigma(u[j]) + (u[j] == 0.0f ? 1.0f : 0.0f);
+    const float fi = fo[j], w = 1.0f / (sigma * sigma);
+    const float grad = 2.0f * w * (fi - u[j]) - kr[j] * g.deriv(kr[j] * (fr[j] - fi - sr[j])) +
+                       kl[j] * g.deriv(kl[j] * (fi - fl[j] - sl[j])) -
+                       kd[j] * g.deriv(kd[j] * (fd[j] - fi - sd[j])) +
+                       ku[j] * g.deriv(ku[j] * (fi - fu[j] - su[j]));
+    const float k2 = kr[j] * kr[j] + kl[j] * kl[j] + kd[j] * kd[j] + ku[j] * ku[j];
+    const float t = 2.0f * w + g.two_l2 * k2;
+    fo[j] = fi - kOmega * grad / t;
   }
-  std::size_t at(int r, int c) const { return std::size_t(r + 1) * w + (c + 1); }
+}
 
-  // One half-sweep: the pixels of one colour of the checkerboard in rows [r0, r1). Each depends
-  // only on the other colour, so rows and pixels are independent.
-  void halfSweep(int r0, int r1, int colour, const Penalty& g) {
-    for (int r = r0; r < r1; ++r) {
-      const std::size_t base = at(r, 0);
-      for (int c = (r + colour) & 1; c < cols; c += 2) {
-        const std::size_t i = base + c;
-        const float fi = f[i];
-        const float grad = 2.0f * weight[i] * (fi - u[i]) -
-                           k_right[i] * g.deriv(k_right[i] * (f[i + 1] - fi - s_right[i])) +
-                           k_right[i - 1] * g.deriv(k_right[i - 1] * (fi - f[i - 1] - s_right[i - 1])) -
-                           k_down[i] * g.deriv(k_down[i] * (f[i + w] - fi - s_down[i])) +
-                           k_down[i - w] * g.deriv(k_down[i - w] * (fi - f[i - w] - s_down[i - w]));
-        f[i] = fi - kOmega * inv_t[i] * grad;
-      }
+// The membrane on inverse range u = 1/ρ. Arrays are in red-black order: each row holds its even
+// columns, then its odd columns, each part with an empty cell at either end, and an empty row
+// pads the top and the bottom, so a half-sweep reads and writes contiguous runs and no pixel
+// needs a border test. The link "right" of a pixel joins it to (r, c + 1), "down" to (r + 1, c);
+// a link's k is 1/σ_u there (0: no link), so τ = k·(f_j − f_i − s) is its excess in noise units.
+struct Membrane {
+  enum Array { kU, kF, kSRight, kKRight, kSDown, kKDown, kArrays };
+  int rows, cols, part, stride;
+  std::size_t size;
+  std::unique_ptr<float[]> storage;  // uninitialised: every cell, padding included, is written
+
+  Membrane(int rows_, int cols_)
+      : rows(rows_), cols(cols_), part((cols_ + 1) / 2 + 2), stride(2 * part),
+        size(std::size_t(rows_ + 2) * std::size_t(stride)), storage(new float[kArrays * size]) {}
+  float* a(Array k) const { return storage.get() + k * size; }
+  std::size_t at(int r, int c) const {
+    return std::size_t(r + 1) * stride + std::size_t((c & 1) * part + 1 + (c >> 1));
+  }
+  // Writes row r (−1 and `rows` are the padding rows) of array k from `natural`, the row's values
+  // in image order (nullptr: all zero), zeroing the padding cells.
+  void storeRow(Array k, int r, const float* natural) const {
+    float* even = a(k) + std::size_t(r + 1) * stride;
+    float* odd = even + part;
+    std::fill_n(even, stride, 0.0f);
+    if (!natural) return;
+    for (int j = 0; j < (cols + 1) / 2; ++j) even[1 + j] = natural[2 * j];
+    for (int j = 0; j < cols / 2; ++j) odd[1 + j] = natural[2 * j + 1];
+  }
+  // The links of row r broken by the line process, in image order: `right[c]` joins (r, c) and
+  // (r, c + 1), `down[c]` joins (r, c) and (r + 1, c).
+  void brokenLinks(int r, float t_break, unsigned char* right, unsigned char* down) const {
+    const std::size_t even = at(r, 0), odd = even + part;
+    const float *f = a(kF), *s = a(kSRight), *k = a(kKRight);
+    for (int j = 0; j < (cols + 1) / 2; ++j) {
+      const std::size_t i = even + j;
+      right[2 * j] = std::abs(k[i] * (f[odd + j] - f[i] - s[i])) > t_break;
+    }
+    for (int j = 0; j < cols / 2; ++j) {
+      const std::size_t i = odd + j;
+      right[2 * j + 1] = std::abs(k[i] * (f[even + j + 1] - f[i] - s[i])) > t_break;
+    }
+    const float *sd = a(kSDown), *kd = a(kKDown);
+    for (int c = 0; c < cols; ++c) {
+      const std::size_t i = at(r, c);
+      down[c] = std::abs(kd[i] * (f[i + stride] - f[i] - sd[i])) > t_break;
     }
   }
+
+  // One half-sweep: the pixels of one colour of the checkerboard in rows [r0, r1). Each depends
+  // only on pixels of the other colour, so rows and pixels are independent.
+  void halfSweep(int r0, int r1, int colour, const NoiseU& noise, const Penalty& g) const {
+    for (int r = r0; r < r1; ++r) {
+      const std::size_t even = at(r, 0), odd = even + part;
+      if ((r & 1) == colour)  // the even columns; their left and right neighbours are odd
+        run(even, odd, odd - 1, (cols + 1) / 2, noise, g);
+      else
+        run(odd, even + 1, even, cols / 2, noise, g);
+    }
+  }
+  // n pixels from index i; their right and left neighbours start at `right` and `left` (in the
+  // other part of the row, which also holds their left links).
+  void run(std::size_t i, std::size_t right, std::size_t left, int n, const NoiseU& noise,
+           const Penalty& g) const {
+    float* f = a(kF);
+    const std::size_t up = i - std::size_t(stride);
+    sorRun(f + i, f + right, f + left, f + i + stride, f + up, a(kU) + i, a(kSRight) + i,
+           a(kKRight) + i, a(kSRight) + left, a(kKRight) + left, a(kSDown) + i, a(kKDown) + i,
+           a(kSDown) + up, a(kKDown) + up, n, noise, g);
+  }
 };
+
+// One row of the membrane in image order: x points at the row's first u (NaN: no data) in an array
+// with `v` floats per row and three NaN cells padding every side. k = 2/(σ_u,i + σ_u,j) for a
+// link between two pixels with data, else 0. Straight-line arithmetic (a missing pixel is u = 0
+// with a mask m = 0) and restrict parameters, so that the loop vectorises.
+void membraneRow(const float* __restrict x, std::ptrdiff_t v, int cols, const NoiseU noise,
+                 float* __restrict u, float* __restrict f, float* __restrict s_right,
+                 float* __restrict k_right, float* __restrict s_down, float* __restrict k_down) {
+  auto mask = [](float y) { return y == y ? 1.0f : 0.0f; };
+  auto value = [](float y) { return y == y ? y : 0.0f; };
+  for (int c = 0; c < cols; ++c) {
+    const float* d = x + c;  // the pixel, then its neighbours at ±1, ±2, ±3 columns or rows
+    const float sr =
+        restDifference(d[-1] - d[-2], d[0] - d[-1], d[1] - d[0], d[2] - d[1], d[3] - d[2]);
+    const float sd = restDifference(d[-v] - d[-2 * v], d[0] - d[-v], d[v] - d[0], d[2 * v] - d[v],
+                                    d[3 * v] - d[2 * v]);
+    // σ_u of a pixel, offset by 1 where it has no data so that nothing divides by 0.
+    const float m0 = mask(d[0]), mr = mask(d[1]), md = mask(d[v]);
+    const float s0 = noise.sigma(value(d[0])) + 1.0f - m0;
+    const float kr = 2.0f * m0 * mr / (s0 + noise.sigma(value(d[1])) + 1.0f - mr);
+    const float kd = 2.0f * m0 * md / (s0 + noise.sigma(value(d[v])) + 1.0f - md);
+    u[c] = f[c] = value(d[0]);
+    s_right[c] = kr != 0.0f ? sr : 0.0f;
+    k_right[c] = kr;
+    s_down[c] = kd != 0.0f ? sd : 0.0f;
+    k_down[c] = kd;
+  }
+}
 
 void requireConfig(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(std::string("GncConfig: ") + what);
@@ -126,83 +231,64 @@ EdgeMask detectRangeEdges(const RangeImage& image, const GncConfig& config) {
                     config.noise.k + config.noise.quantization_m > 0,
                 "noise k and quantization_m must be non-negative, not both zero");
   const int rows = image.rows(), cols = image.cols();
-  EdgeMask edges = EdgeMask::Zero(rows, cols);
+  EdgeMask edges(rows, cols);
   if (rows == 0 || cols == 0) return edges;
   const long pixels = long(rows) * cols;
+
+  // u = 1/ρ in image order, NaN where there is no data, with three NaN rows and columns either
+  // side so that every trend window stays in bounds.
+  const int wn = cols + 6;
+  std::vector<float> un(std::size_t(rows + 6) * wn, kNaN);
+  auto nat = [&](int r, int c) { return &un[std::size_t(r + 3) * wn + std::size_t(c + 3)]; };
+  forRows(rows, pixels, [&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r)
+      for (int c = 0; c < cols; ++c) {
+        const float rho = image.range(r, c);
+        if (std::isfinite(rho) && rho > 0) *nat(r, c) = 1.0f / rho;
+      }
+  });
+
+  // The membrane's data and links. σ_u = σ(ρ)/ρ² = σ_q·u² + k is the noise of u, so the data
+  // term is weighted by 1/σ_u² and a link's k is 2/(σ_u,i + σ_u,j).
   Membrane m(rows, cols);
-  // σ_u = σ(ρ)/ρ² is the noise of u = 1/ρ; each pixel's data term is weighted by 1/σ_u².
-  std::vector<float> sigma_u(m.u.size(), 0.0f);
+  const NoiseU noise{float(config.noise.quantization_m / std::sqrt(12.0)), float(config.noise.k)};
+  for (int k = 0; k < Membrane::kArrays; ++k)
+    m.storeRow(Membrane::Array(k), -1, nullptr), m.storeRow(Membrane::Array(k), rows, nullptr);
   forRows(rows, pixels, [&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r)
-      for (int c = 0; c < cols; ++c) {
-        const double rho = image.range(r, c);
-        if (!(std::isfinite(rho) && rho > 0)) continue;
-        const std::size_t i = m.at(r, c);
-        const double su = config.noise.sigma(rho) / (rho * rho);
-        m.u[i] = m.f[i] = float(1.0 / rho);
-        sigma_u[i] = float(su);
-        m.weight[i] = float(1.0 / (su * su));
-      }
-  });
-  // First differences of u along rows and columns, NaN where a link touches an invalid pixel; two
-  // NaN links pad every scanline's ends so the trend window needs no bounds.
-  const int wd = cols + 4;
-  std::vector<float> diff_right(std::size_t(rows) * wd, kNaN);
-  std::vector<float> diff_down(std::size_t(rows + 4) * cols, kNaN);
-  forRows(rows, pixels, [&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r)
-      for (int c = 0; c < cols; ++c) {
-        const std::size_t i = m.at(r, c);
-        if (!(m.weight[i] > 0)) continue;
-        if (m.weight[i + 1] > 0) diff_right[std::size_t(r) * wd + c + 2] = m.u[i + 1] - m.u[i];
-        if (m.weight[i + m.w] > 0) diff_down[std::size_t(r + 2) * cols + c] = m.u[i + m.w] - m.u[i];
-      }
-  });
-  // Links: the trend s, and k = 1/σ_u with σ_u the mean of the two pixels' (0 for no link).
-  forRows(rows, pixels, [&](int r0, int r1) {
+    std::vector<float> buffer(std::size_t(Membrane::kArrays) * cols);
+    float* row[Membrane::kArrays];
+    for (int k = 0; k < Membrane::kArrays; ++k) row[k] = &buffer[std::size_t(k) * cols];
     for (int r = r0; r < r1; ++r) {
-      const float* dr = &diff_right[std::size_t(r) * wd + 2];
-      const float* dd = &diff_down[std::size_t(r + 2) * cols];
-      for (int c = 0; c < cols; ++c) {
-        const std::size_t i = m.at(r, c);
-        const bool right = dr[c] == dr[c], down = dd[c] == dd[c];
-        m.s_right[i] = right ? restDifference(dr[c - 2], dr[c - 1], dr[c], dr[c + 1], dr[c + 2]) : 0.0f;
-        m.k_right[i] = right ? 2.0f / (sigma_u[i] + sigma_u[i + 1]) : 0.0f;
-        m.s_down[i] = down ? restDifference(dd[c - 2 * cols], dd[c - cols], dd[c], dd[c + cols], dd[c + 2 * cols]) : 0.0f;
-        m.k_down[i] = down ? 2.0f / (sigma_u[i] + sigma_u[i + m.w]) : 0.0f;
-      }
+      membraneRow(nat(r, 0), wn, cols, noise, row[Membrane::kU], row[Membrane::kF],
+                  row[Membrane::kSRight], row[Membrane::kKRight], row[Membrane::kSDown],
+                  row[Membrane::kKDown]);
+      for (int k = 0; k < Membrane::kArrays; ++k) m.storeRow(Membrane::Array(k), r, row[k]);
     }
   });
-  // T bounds ∂²E/∂f_i² (Blake & Zisserman's SOR step).
-  const float lambda2 = float(config.lambda * config.lambda);
-  forRows(rows, pixels, [&](int r0, int r1) {
-    for (int r = r0; r < r1; ++r)
-      for (int c = 0; c < cols; ++c) {
-        const std::size_t i = m.at(r, c), up = i - m.w;
-        const float k2 = m.k_right[i] * m.k_right[i] + m.k_right[i - 1] * m.k_right[i - 1] +
-                         m.k_down[i] * m.k_down[i] + m.k_down[up] * m.k_down[up];
-        m.inv_t[i] = m.weight[i] > 0 ? 1.0f / (2.0f * m.weight[i] + 2.0f * lambda2 * k2) : 0.0f;
-      }
-  });
+
   // GNC: p = 1 (convex) halving down to 1/(2λ), each step's minimum starting the next.
   const double p_end = std::min(1.0, 0.5 / config.lambda);
   for (double p = 1.0;; p = std::max(0.5 * p, p_end)) {
     const Penalty g(config.lambda, config.h0, p);
     for (int s = 0; s < config.sweeps; ++s)
       for (int colour = 0; colour < 2; ++colour)
-        forRows(rows, pixels, [&](int r0, int r1) { m.halfSweep(r0, r1, colour, g); });
+        forRows(rows, pixels, [&](int r0, int r1) { m.halfSweep(r0, r1, colour, noise, g); });
     if (p <= p_end) break;
   }
-  // The line process: a link is broken where the final |τ| exceeds √α/λ = h0/√(2λ).
-  const float h0 = float(config.h0 / std::sqrt(2.0 * config.lambda));
-  for (int r = 0; r < rows; ++r)
-    for (int c = 0; c < cols; ++c) {
-      const std::size_t i = m.at(r, c);
-      if (std::abs(m.k_right[i] * (m.f[i + 1] - m.f[i] - m.s_right[i])) > h0)
-        edges(r, c) = edges(r, c + 1) = 1;
-      if (std::abs(m.k_down[i] * (m.f[i + m.w] - m.f[i] - m.s_down[i])) > h0)
-        edges(r, c) = edges(r + 1, c) = 1;
+
+  // The line process: a link is broken where the final |τ| exceeds √α/λ = h0/√(2λ); a pixel is an
+  // edge if any of its four links is.
+  const float t_break = float(config.h0 / std::sqrt(2.0 * config.lambda));
+  forRows(rows, pixels, [&](int r0, int r1) {
+    std::vector<unsigned char> right(cols), down(cols), down_above(cols, 0);
+    if (r0 > 0) m.brokenLinks(r0 - 1, t_break, right.data(), down_above.data());
+    for (int r = r0; r < r1; ++r) {
+      m.brokenLinks(r, t_break, right.data(), down.data());
+      for (int c = 0; c < cols; ++c)
+        edges(r, c) = right[c] | (c > 0 ? right[c - 1] : 0) | down[c] | down_above[c];
+      std::swap(down, down_above);
     }
+  });
   return edges;
 }
 
@@ -223,18 +309,21 @@ long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise
       else rho = std::numeric_limits<float>::quiet_NaN();
     }
   long unwrapped = 0;
-  // The multiple of A that puts the measurement m within tolerance of the predicted 1/ρ, if
-  // exactly one does.
-  auto decide = [&](int r, int c, double u_pred) {
+  // The multiple n of A that puts the measurement m + nA within `tol` of the predicted 1/ρ — or,
+  // with `jump`, within a factor kUnwrapJumpRatio of the predicted ρ — if exactly one does.
+  auto decide = [&](int r, int c, double u_pred, bool jump) {
     if (!(u_pred > 0)) return;
     const double m = image.range(r, c), rho_pred = 1.0 / u_pred;
     const double tol = kUnwrapSigmas * std::sqrt(6.0) * noise.sigma(rho_pred) * u_pred * u_pred;
-    const long n0 = std::lround((rho_pred - m) / a);
+    const double lo = jump ? rho_pred / kUnwrapJumpRatio : 0;
+    const double hi = jump ? rho_pred * kUnwrapJumpRatio : 0;
+    const long n_hi = long(std::ceil((std::max(hi, rho_pred) - m) / a)) + 1;
     int hits = 0;
     long best = 0;
-    for (long n = std::max(0L, n0 - 1); n <= std::max(0L, n0 + 1); ++n) {
+    for (long n = 0; n <= n_hi; ++n) {
       const double rho = m + double(n) * a;
-      if (rho > 0 && std::abs(1.0 / rho - u_pred) <= tol) ++hits, best = n;
+      const bool fits = std::abs(1.0 / rho - u_pred) <= tol || (rho >= lo && rho <= hi);
+      if (rho > 0 && fits) ++hits, best = n;
     }
     if (hits != 1) return;
     image.range(r, c) = float(m + double(best) * a);
@@ -243,15 +332,20 @@ long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise
   };
   for (int r = rows - 3; r >= 0; --r) {
     auto open = [&](int c) { return std::isfinite(image.range(r, c)) && std::isnan(U(r, c)); };
-    for (int c = 0; c < cols; ++c)  // from below
-      if (open(c) && std::isfinite(U(r + 1, c)) && std::isfinite(U(r + 2, c)))
-        decide(r, c, 2 * U(r + 1, c) - U(r + 2, c));
-    for (int c = 2; c < cols; ++c)  // from the left
-      if (open(c) && std::isfinite(U(r, c - 1)) && std::isfinite(U(r, c - 2)))
-        decide(r, c, 2 * U(r, c - 1) - U(r, c - 2));
-    for (int c = cols - 3; c >= 0; --c)  // from the right
-      if (open(c) && std::isfinite(U(r, c + 1)) && std::isfinite(U(r, c + 2)))
-        decide(r, c, 2 * U(r, c + 1) - U(r, c + 2));
+    // Continuity from below, then along the row both ways; `jump` admits discontinuities.
+    auto passes = [&](bool jump) {
+      for (int c = 0; c < cols; ++c)
+        if (open(c) && std::isfinite(U(r + 1, c)) && std::isfinite(U(r + 2, c)))
+          decide(r, c, 2 * U(r + 1, c) - U(r + 2, c), jump);
+      for (int c = 2; c < cols; ++c)
+        if (open(c) && std::isfinite(U(r, c - 1)) && std::isfinite(U(r, c - 2)))
+          decide(r, c, 2 * U(r, c - 1) - U(r, c - 2), jump);
+      for (int c = cols - 3; c >= 0; --c)
+        if (open(c) && std::isfinite(U(r, c + 1)) && std::isfinite(U(r, c + 2)))
+          decide(r, c, 2 * U(r, c + 1) - U(r, c + 2), jump);
+    };
+    passes(false);  // continuous surfaces first: they are the surer path
+    passes(true);
     for (int c = 0; c < cols; ++c)
       if (open(c)) image.range(r, c) = std::numeric_limits<float>::quiet_NaN();
   }

@@ -22,12 +22,12 @@ struct RangeNoise {
 
 struct GncConfig {
   RangeNoise noise;
-  // The membrane runs on the noise-normalised range F(ρ) = ∫dρ/σ(ρ) (one unit = one σ at every
-  // range) with each link's local trend removed; E = Σ(f − d)² + Σ g(f_j − f_i − s_ij), g the
-  // truncated quadratic λ²t² capped at α = λ²h0².
-  double lambda = 2.0;  // membrane scale, pixels
-  double h0 = 6.0;      // contrast threshold, σ units: the smallest jump beyond the trend that breaks
-  int sweeps = 5;       // red-black SOR sweeps at each step of the p-sequence 1, 1/2, … 1/(2λ)
+  // The weak membrane runs on inverse range u = 1/ρ, in units of its noise σ_u = σ(ρ)/ρ², with
+  // each link's local trend removed: E = Σ (f − u)²/σ_u² + Σ g(k·(f_j − f_i − s_ij)), k = 1/σ_u,
+  // g the truncated quadratic λ²t² capped at α = λh0²/2 (Blake & Zisserman's notation).
+  double lambda = 1.0;  // membrane scale, pixels
+  double h0 = 6.0;      // contrast threshold (σ units): the smallest jump beyond the trend to break
+  int sweeps = 3;       // red-black SOR sweeps at each step of the p-sequence 1, 1/2, … 1/(2λ)
 };
 
 // The edges of `image` (NaN or non-positive pixels carry no data: their links neither smooth nor
@@ -38,9 +38,10 @@ EdgeMask detectRangeEdges(const RangeImage& image, const GncConfig& config = {})
 // Unwraps ranges folded by the ambiguity interval A, in place. The bottom two rows look down at the
 // near field and are taken as unfolded (ρ < A); each row above takes, per pixel, the multiple of A
 // continuous with a linear prediction from the two unwrapped pixels below, or else from two
-// unwrapped pixels beside it in the same row. A pixel whose fold no continuous neighbour decides
-// becomes NaN. Returns the number of pixels that received a non-zero multiple of A. Throws
-// std::invalid_argument if ambiguity_m is not positive.
+// unwrapped pixels beside it in the same row; failing that, across a depth discontinuity, the one
+// multiple that changes the predicted range by at most a factor 1.5. A pixel no neighbour decides
+// becomes NaN, never a wrapped range. Returns the number of pixels that received a non-zero
+// multiple of A. Throws std::invalid_argument if ambiguity_m is not positive.
 long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise = {});
 
 }  // namespace ambler::perception

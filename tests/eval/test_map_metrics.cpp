@@ -131,6 +131,99 @@ TEST(MapMetrics, RejectsRastersOffTheMapGrid) {
   EXPECT_THROW(mapMetrics(k.map, k.truth, sim::VisibilityRaster(4, 4)), std::invalid_argument);
 }
 
+// Range bands on a 1 × 8 row of 1 m cells, the sensor at (0.5, 0.5, 0) above the centre of cell 0,
+// so each cell's range is |(c, 0, z_c)|. Per cell: truth z, range, band, state, error, σ,
+// visibility:
+//   0:  6   6      [6, 9)    K  +0.5   1     v
+//   1:  0   1      [0, 6)    K  −0.25  0.1   v
+//   2: 10   10.2   [9, 12)   K  +0.375 NaN   v
+//   3:  4   5      [0, 6)    U               v
+//   4: NaN  —      none      K  (no truth: in no band)
+//   5: 12  13      [12, 16)  S               h
+//   6:  8  10      [9, 12)   K  −0.5   0.5   v
+//   7:  0   7      [6, 9)    K  +0.25  0.25  o
+// Cell 0 sits exactly on the 6 m edge: bands are [lo, hi).
+TEST(MapMetrics, RangeBandsByDistanceToTheTrueSurface) {
+  perception::ElevationMap map(perception::MapGrid{0.0, 1.0, 1.0, 1, 8});
+  sim::ElevationRaster truth(1, 8);
+  sim::VisibilityRaster vis(1, 8);
+  const float z[8] = {6, 0, 10, 4, kNaN, 12, 8, 0};
+  const char* v = "vvvvvhvo";
+  for (int c = 0; c < 8; ++c) {
+    truth(0, c) = z[c];
+    vis(0, c) = std::uint8_t(v[c] == 'v' ? sim::Visibility::Visible
+                             : v[c] == 'h' ? sim::Visibility::Hidden
+                                           : sim::Visibility::OutOfView);
+  }
+  map.setKnown(0, 0, 6.5f, 1.0f);
+  map.setKnown(0, 1, -0.25f, 0.1f);
+  map.setKnown(0, 2, 10.375f, kNaN);
+  map.setKnown(0, 4, 1.0f, 0.1f);
+  map.setUnknown(0, 5, CellState::Shadow);
+  map.setKnown(0, 6, 7.5f, 0.5f);
+  map.setKnown(0, 7, 0.25f, 0.25f);
+  const Eigen::Vector3d sensor(0.5, 0.5, 0.0);
+  const MapMetrics m = mapMetrics(map, truth, vis, &sensor);
+  ASSERT_EQ(m.bands.size(), 5u);
+  const double inf = std::numeric_limits<double>::infinity();
+  const double lo[5] = {0, 6, 9, 12, 16}, hi[5] = {6, 9, 12, 16, inf};
+  const long visible[5] = {2, 1, 2, 0, 0}, known[5] = {1, 2, 2, 0, 0};
+  for (int b = 0; b < 5; ++b) {
+    EXPECT_EQ(m.bands[b].lo_m, lo[b]);
+    EXPECT_EQ(m.bands[b].hi_m, hi[b]);
+    EXPECT_EQ(m.bands[b].visible, visible[b]) << b;
+    EXPECT_EQ(m.bands[b].known, known[b]) << b;
+  }
+  EXPECT_DOUBLE_EQ(m.bands[0].coverage, 0.5);  // cell 3 unseen
+  EXPECT_DOUBLE_EQ(m.bands[0].rms_error_m, 0.25);
+  EXPECT_DOUBLE_EQ(m.bands[0].median_abs_error_m, 0.25);
+  EXPECT_DOUBLE_EQ(m.bands[0].within_1sigma, 0.0);
+  EXPECT_DOUBLE_EQ(m.bands[1].coverage, 1.0);  // cell 7 is known but out of view
+  EXPECT_DOUBLE_EQ(m.bands[1].rms_error_m, std::sqrt((0.25 + 0.0625) / 2));
+  EXPECT_DOUBLE_EQ(m.bands[1].median_abs_error_m, 0.375);
+  EXPECT_DOUBLE_EQ(m.bands[1].within_1sigma, 1.0);  // 0.25 ≤ 0.25 on the boundary
+  EXPECT_DOUBLE_EQ(m.bands[2].coverage, 1.0);
+  EXPECT_DOUBLE_EQ(m.bands[2].rms_error_m, std::sqrt((0.140625 + 0.25) / 2));
+  EXPECT_DOUBLE_EQ(m.bands[2].median_abs_error_m, 0.4375);
+  EXPECT_DOUBLE_EQ(m.bands[2].within_1sigma, 1.0);  // cell 2 has no σ
+  for (int b : {3, 4}) {
+    EXPECT_TRUE(std::isnan(m.bands[b].coverage)) << b;
+    EXPECT_TRUE(std::isnan(m.bands[b].rms_error_m)) << b;
+    EXPECT_TRUE(std::isnan(m.bands[b].within_1sigma)) << b;
+  }
+
+  // The whole-map figures do not depend on the bands; without a sensor there are none.
+  const MapMetrics plain = mapMetrics(map, truth, vis);
+  EXPECT_TRUE(plain.bands.empty());
+  EXPECT_EQ(plain.compared, m.compared);
+  EXPECT_EQ(plain.rms_error_m, m.rms_error_m);
+  EXPECT_FALSE(toJson(plain, 0).contains("by_range"));
+  EXPECT_FALSE(cartesianJson(plain, 0).contains("by_range"));
+
+  // JSON: by_range after the existing keys; an open upper edge and empty figures are null.
+  for (const auto& j : {toJson(m, 0), cartesianJson(m, 0)}) {
+    EXPECT_EQ(j.items().begin().key(), "view");
+    EXPECT_EQ((--j.end()).key(), "by_range");
+    const auto& bands = j["by_range"];
+    ASSERT_EQ(bands.size(), 5u);
+    std::vector<std::string> keys;
+    for (const auto& item : bands[0].items()) keys.push_back(item.key());
+    EXPECT_EQ(keys, (std::vector<std::string>{"range_m", "visible", "known", "coverage", "rms_error_m",
+                                              "median_abs_error_m", "within_1sigma"}));
+    EXPECT_EQ(bands[0]["range_m"], nlohmann::json::parse("[0.0, 6.0]"));
+    EXPECT_EQ(bands[4]["range_m"][0].get<double>(), 16.0);
+    EXPECT_TRUE(bands[4]["range_m"][1].is_null());
+    EXPECT_EQ(bands[1]["median_abs_error_m"].get<double>(), 0.375);
+    EXPECT_TRUE(bands[3]["rms_error_m"].is_null());
+  }
+  auto j = toJson(m, 0);
+  j.erase("by_range");
+  EXPECT_EQ(j.dump(), toJson(plain, 0).dump());
+  auto cj = cartesianJson(m, 0);
+  cj.erase("by_range");
+  EXPECT_EQ(cj.dump(), cartesianJson(plain, 0).dump());
+}
+
 // A directory that is removed afterwards, or AMBLER_TEST_PICTURES if set (kept).
 struct OutDir {
   fs::path dir;
