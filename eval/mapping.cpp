@@ -1,5 +1,6 @@
 #include "eval/mapping.hpp"
 
+#include <algorithm>
 #include <chrono>
 
 namespace ambler::eval {
@@ -21,8 +22,17 @@ MapBuild buildLocusMap(const perception::RangeImage& measured, const MapSpec& ma
   const auto t0 = std::chrono::steady_clock::now();
   MapBuild b;
   b.image = measured;
-  if (sensor.ambiguity_m > 0) b.unwrapped = perception::unwrapRanges(b.image, sensor.ambiguity_m);
-  if (map.shadows == "gnc") b.edges = perception::detectRangeEdges(b.image);
+  // The onboard code knows its sensor's noise model; zero noise still leaves float rounding, so
+  // the model keeps a floor of one millimetre-scale count.
+  perception::RangeNoise noise;
+  noise.k = sensor.noise_k;
+  noise.quantization_m = std::max(sensor.quantization_m, 1e-3);
+  if (sensor.ambiguity_m > 0) b.unwrapped = perception::unwrapRanges(b.image, sensor.ambiguity_m, noise);
+  if (map.shadows == "gnc") {
+    perception::GncConfig gnc;
+    gnc.noise = noise;
+    b.edges = perception::detectRangeEdges(b.image, gnc);
+  }
   const perception::LocusMapper mapper(b.image, b.edges ? &*b.edges : nullptr,
                                        config ? *config : locusConfig(map, sensor));
   b.locus = mapper.map(mapGrid(map));
