@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "fixtures.hpp"
+#include "perception/range_image.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
 #include "terrains/random.hpp"
@@ -190,6 +191,46 @@ TEST(ErimScanner, DropoutFraction) {
       if (std::isfinite(scan.true_range(r, col))) ++hits, missing += !scan.image.valid(r, col);
   const double p = double(missing) / hits;
   EXPECT_NEAR(p, c.dropout, 5 * std::sqrt(c.dropout * (1 - c.dropout) / hits));
+}
+
+// A mixed pixel lies between the two surfaces: a wall face at y = 5 m covering x < 0 in front
+// of a backdrop at y = 10 m. A footprint straddling the wall's edge returns a range between the
+// wall's and the backdrop's (the power-weighted mean of its sub-rays), never outside them; away
+// from the edge, pixels return their own surface.
+TEST(ErimScanner, MixedPixelLiesBetweenTheTwoSurfaces) {
+  const test::MjcfWorld w(R"(
+<mujoco>
+  <worldbody>
+    <geom type="box" size="2 0.05 3" pos="-2 5.05 0"/>
+    <geom type="box" size="20 0.05 20" pos="0 10.05 0"/>
+  </worldbody>
+</mujoco>)");
+  ErimConfig c = idealSensor();
+  c.mixed_pixels = true;
+  c.rows = 8;
+  c.cols = 64;
+  c.fov_v_rad = 10 * kDeg;
+  c.fov_h_rad = 20 * kDeg;
+  c.beam_divergence_rad = 1.0 * kDeg;  // a wide footprint: several pixels straddle the edge
+  const Scan scan = ErimScanner(*w.scene, c).scan(Eigen::Isometry3d::Identity(), 1);
+  int mixed = 0;
+  for (int r = 0; r < c.rows; ++r)
+    for (int col = 0; col < c.cols; ++col) {
+      ASSERT_TRUE(scan.image.valid(r, col));
+      const double rho = scan.image.range(r, col);
+      // Along a direction d the planes y = 5 and y = 10 are at 5/d_y and 10/d_y; over the
+      // footprint (half-angle 0.5°) d_y changes by well under 1 %.
+      const double dy = perception::beamDirection(scan.image.phi[r], scan.image.theta[col]).y();
+      const double near = 5.0 / dy, far = 10.0 / dy;
+      EXPECT_GE(rho, 0.99 * near) << r << "," << col;
+      EXPECT_LE(rho, 1.01 * far) << r << "," << col;
+      const double x_wall = 5.0 * std::tan(scan.image.theta[col]);  // where the beam meets y = 5
+      if (std::abs(x_wall) > 0.2) {  // the footprint (±0.044 m at 5 m) is clear of the edge
+        EXPECT_NEAR(rho, x_wall < 0 ? near : far, 0.01 * far) << r << "," << col;
+      }
+      mixed += rho > near + 0.5 && rho < far - 0.5;
+    }
+  EXPECT_GE(mixed, c.rows);  // at least one mixed pixel per scanline
 }
 
 // Same seed: identical bits, whatever the number of threads; another seed: other noise.
