@@ -128,6 +128,14 @@ class Results {
     return summary(v);
   }
 
+  // The largest value over the runs of a group (NaN if none is finite).
+  double largest(const std::vector<std::size_t>& group, const std::string& column) const {
+    double out = kNaN;
+    for (const std::size_t k : group)
+      if (const double x = value(k, column); std::isfinite(x) && !(x <= out)) out = x;
+    return out;
+  }
+
   // The gap filling the runs of a group chose: "linear", or "linear 2/3, nearest 1/3".
   std::string fills(const std::vector<std::size_t>& group) const {
     std::map<std::string, int> count;
@@ -251,6 +259,9 @@ std::string ratioCell(const Stat& locus, const Stat& cart) {
 
 // ---- tables -------------------------------------------------------------------------------------
 
+// " text |": one more cell of a markdown row.
+void appendCell(std::string& row, const std::string& text) { row.append(" ").append(text).append(" |"); }
+
 using Labeller = std::string (*)(const Results&, const std::vector<std::size_t>&);
 
 std::string tiltRow(const Results& r, const std::vector<std::size_t>& g) {
@@ -264,11 +275,12 @@ std::string cellRow(const Results& r, const std::vector<std::size_t>& g) {
 std::string wholeMapTable(const Results& r, const std::string& head, Labeller label) {
   std::string out = "| " + head +
                     " | coverage locus % | coverage Cart. % | RMS locus mm | RMS Cart. mm | RMS locus / Cart."
-                    " | median locus mm | median Cart. mm | Cart. fill | locus within 1σ % | locus shadow cells |\n";
+                    " | median locus mm | median Cart. mm | worst cell mm (L / C) | Cart. fill | locus within 1σ % |"
+                    " locus shadow cells |\n";
   const int head_cells = int(std::count(head.begin(), head.end(), '|')) + 1;
   out += "|";
   for (int i = 0; i < head_cells; ++i) out += "---|";
-  out += "---:|---:|---:|---:|---:|---:|---:|---|---:|---:|\n";
+  out += "---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|\n";
   for (const auto& g : r.groups()) {
     const Stat cl = r.stat(g, whole("map", "coverage")), cc = r.stat(g, whole("map_cartesian", "coverage"));
     const Stat rl = r.stat(g, whole("map", "rms_error_m")), rc = r.stat(g, whole("map_cartesian", "rms_error_m"));
@@ -278,17 +290,19 @@ std::string wholeMapTable(const Results& r, const std::string& head, Labeller la
     const int br = better(r, g, whole("map", "rms_error_m"), whole("map_cartesian", "rms_error_m"), true);
     const int bm =
         better(r, g, whole("map", "median_abs_error_m"), whole("map_cartesian", "median_abs_error_m"), true);
-    out += "| " + label(r, g) + " | " + bold(meanSd(cl, 100, 1), bc < 0) + " | " + bold(meanSd(cc, 100, 1), bc > 0) +
-           " | " + bold(meanSd(rl, 1000), br < 0) + " | " + bold(meanSd(rc, 1000), br > 0) + " | " +
-           ratioCell(rl, rc) + " | " + bold(meanSd(ml, 1000), bm < 0) + " | " + bold(meanSd(mc, 1000), bm > 0) +
-           " | " + r.fills(g) + " | " + meanSd(r.stat(g, whole("map", "within_1sigma")), 100, 1) + " | " +
-           meanSd(r.stat(g, whole("map", "shadow")), 1, 0) + " |\n";
+    const std::string worst = number(1000 * r.largest(g, whole("map", "max_abs_error_m"))) + " / " +
+                              number(1000 * r.largest(g, whole("map_cartesian", "max_abs_error_m")));
+    std::string row = "| " + label(r, g) + " |";
+    for (const std::string& cell :
+         {bold(meanSd(cl, 100, 1), bc < 0), bold(meanSd(cc, 100, 1), bc > 0), bold(meanSd(rl, 1000), br < 0),
+          bold(meanSd(rc, 1000), br > 0), ratioCell(rl, rc), bold(meanSd(ml, 1000), bm < 0),
+          bold(meanSd(mc, 1000), bm > 0), worst, r.fills(g), meanSd(r.stat(g, whole("map", "within_1sigma")), 100, 1),
+          meanSd(r.stat(g, whole("map", "shadow")), 1, 0)})
+      appendCell(row, cell);
+    out += row + "\n";
   }
   return out;
 }
-
-// " text |": one more cell of a markdown row.
-void appendCell(std::string& row, const std::string& text) { row.append(" ").append(text).append(" |"); }
 
 // The header and alignment rows of a table with the `head` columns and one column per range band.
 std::string bandHeader(const std::string& head) {
@@ -343,7 +357,8 @@ std::string report(const Results& tilt, const Results& res, bool quick) {
         "linear gap filling). A figure is in bold where it beats the other map by more than the "
         "seed-to-seed spread: each run maps the same scan both ways, and the mean of the paired difference exceeds "
         "its standard deviation over seeds. Coverage is known ∩ visible / visible; "
-        "errors are over known cells with a true surface.\n\n";
+        "errors are over known cells with a true surface; the worst cell is the largest |error| over the "
+        "seeds.\n\n";
   md += "### Tilted planes: whole map (0.10 m cells)\n\n" + wholeMapTable(tilt, tilt_head, tiltRow);
   md += "\n### Tilted planes: RMS error by range band, mm (L / C)\n\n" +
         bandTable(tilt, tilt_head, tiltRow, "rms_error_m", 1000, true, -1);
