@@ -623,29 +623,6 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
 }
 
 // Resolved-YAML pieces.
-std::string yamlString(std::string_view text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '"')
-      out += "\\\"";
-    else if (c == '\\')
-      out += "\\\\";
-    else if (c == '\n')
-      out += "\\n";
-    else if (c == '\t')
-      out += "\\t";
-    else if (u < 0x20 || u == 0x7f) {
-      constexpr char kHex[] = "0123456789abcdef";
-      out += "\\x";
-      out += kHex[u >> 4];
-      out += kHex[u & 0xf];
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
 
 std::string list(std::initializer_list<std::string> items) {
   std::string out = "[";
@@ -688,8 +665,8 @@ std::string resolvedYaml(const Scenario& s) {
   const auto num = [](double v) { return shortest(v); };
   const auto deg = [](double rad) { return degreesText(rad); };
   std::string y = "# every key written out, defaults filled in (docs/scenario.md)\n";
-  y += "name: " + yamlString(s.name) + "\n";
-  y += "description: " + yamlString(s.description) + "\n";
+  y += "name: " + yamlQuoted(s.name) + "\n";
+  y += "description: " + yamlQuoted(s.description) + "\n";
   y += "seed: " + std::to_string(s.seed) + "\n";
 
   const auto& t = s.terrain;
@@ -723,7 +700,7 @@ std::string resolvedYaml(const Scenario& s) {
          ", max_diameter_m: " + num(t.craters->max_diameter_m) +
          ", sfd_exponent: " + num(t.craters->sfd_exponent) + "}\n";
   }
-  if (t.kind == TerrainKind::Mjcf) y += "  mjcf: " + yamlString(t.mjcf) + "\n";
+  if (t.kind == TerrainKind::Mjcf) y += "  mjcf: " + yamlQuoted(t.mjcf) + "\n";
 
   const auto& c = s.sensor;
   y += "sensor:\n";
@@ -755,6 +732,30 @@ std::string resolvedYaml(const Scenario& s) {
     y += "  baseline: " + m.baseline + "\n";
   }
   return y;
+}
+
+std::string yamlQuoted(std::string_view text) {
+  std::string out = "\"";
+  for (const char c : text) {
+    const auto u = static_cast<unsigned char>(c);
+    if (c == '"')
+      out += "\\\"";
+    else if (c == '\\')
+      out += "\\\\";
+    else if (c == '\n')
+      out += "\\n";
+    else if (c == '\t')
+      out += "\\t";
+    else if (u < 0x20 || u == 0x7f) {
+      constexpr char kHex[] = "0123456789abcdef";
+      out += "\\x";
+      out += kHex[u >> 4];
+      out += kHex[u & 0xf];
+    } else {
+      out += c;
+    }
+  }
+  return out + "\"";
 }
 
 }  // namespace ambler::eval

@@ -7,6 +7,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "terrains/terrain.hpp"
@@ -69,5 +70,9 @@ Scenario parseScenario(const std::string& yaml_text, const std::filesystem::path
 // parseScenario(resolvedYaml(s), s.file) gives back s bit for bit when s came from parseScenario;
 // an angle set in code as radians may read back one ulp off (no degree double maps onto it).
 std::string resolvedYaml(const Scenario& scenario);
+
+// `text` as a double-quoted YAML scalar (backslash escapes for quotes, backslashes and control
+// characters), so strings read back exactly.
+std::string yamlQuoted(std::string_view text);
 
 }  // namespace ambler::eval

@@ -38,26 +38,6 @@ constexpr std::size_t kMaxRuns = 100'000;
 
 bool isQuoted(const YAML::Node& node) { return node.Tag() == "!"; }
 
-std::string doubleQuoted(std::string_view text) {
-  std::string out = "\"";
-  for (const char c : text) {
-    const auto u = static_cast<unsigned char>(c);
-    if (c == '"' || c == '\\') {
-      out += '\\';
-      out += c;
-    } else if (c == '\n') {
-      out += "\\n";
-    } else if (u < 0x20 || u == 0x7f) {
-      constexpr char kHex[] = "0123456789abcdef";
-      out += "\\x";
-      out += kHex[u >> 4];
-      out += kHex[u & 0xf];
-    } else {
-      out += c;
-    }
-  }
-  return out + "\"";
-}
 
 // Whether text read as a plain scalar reads back the same written plain on one line of block YAML.
 bool plainSafe(std::string_view s) {
@@ -75,7 +55,7 @@ bool plainSafe(std::string_view s) {
 // A scalar as it must be written so that the scenario reader sees what the user wrote: a quoted
 // string stays quoted ("40" is a string, not a number), a plain one stays plain.
 std::string scalarText(const YAML::Node& node) {
-  return isQuoted(node) || !plainSafe(node.Scalar()) ? doubleQuoted(node.Scalar()) : node.Scalar();
+  return isQuoted(node) || !plainSafe(node.Scalar()) ? yamlQuoted(node.Scalar()) : node.Scalar();
 }
 
 // A value on one line, as in a YAML flow collection (for messages and nested CSV cells).
@@ -124,7 +104,7 @@ void emitBlock(const YAML::Node& node, int indent, std::string& out) {
   for (auto it = node.begin(); it != node.end(); ++it) {
     if (node.IsMap()) {
       const YAML::Node& key = it->first;
-      out += pad + (key.IsScalar() && plainSafe(key.Scalar()) ? key.Scalar() : doubleQuoted(flowText(key))) +
+      out += pad + (key.IsScalar() && plainSafe(key.Scalar()) ? key.Scalar() : yamlQuoted(flowText(key))) +
              ":";
       emitValue(it->second, indent, out);
     } else {
@@ -250,7 +230,7 @@ class SweepReader {
     }
     std::error_code ec;
     if (!fs::is_regular_file(sweep.base, ec)) {
-      fail("base", "cannot find the scenario file " + doubleQuoted(base) + " (looked for " +
+      fail("base", "cannot find the scenario file " + yamlQuoted(base) + " (looked for " +
                        fs::absolute(sweep.base, ec).lexically_normal().string() + ")");
     }
     base_text_ = readText(sweep.base, where_ + ": base: " + sweep.base.string());
@@ -643,7 +623,7 @@ Shard parseShard(const std::string& text) {
   if (parts.size() != 2 || !parse(parts[0], s.index) || !parse(parts[1], s.count) || s.index < 1 ||
       s.index > s.count) {
     throw SweepError("--shard: expected K/N with 1 <= K <= N (shard K of N, 1-based), got " +
-                     doubleQuoted(text));
+                     yamlQuoted(text));
   }
   return s;
 }
@@ -652,7 +632,7 @@ Keep parseKeep(const std::string& text) {
   if (text == "none") return Keep::None;
   if (text == "metrics") return Keep::Metrics;
   if (text == "all") return Keep::All;
-  throw SweepError("--keep: expected one of none, metrics, all, got " + doubleQuoted(text));
+  throw SweepError("--keep: expected one of none, metrics, all, got " + yamlQuoted(text));
 }
 
 fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
@@ -811,7 +791,7 @@ fs::path mergeSweep(const Sweep& sweep, const fs::path& out, bool progress) {
       std::size_t k = 0;
       if (!allDigits(row[0]) || row[0].size() > 9 || (k = std::stoul(row[0])) >= total) {
         throw SweepError(at + "expected a run index in [0, " + std::to_string(total - 1) + "], got " +
-                         doubleQuoted(row[0]));
+                         yamlQuoted(row[0]));
       }
       if (k % std::size_t(n) != std::size_t(shard.index - 1)) {
         throw SweepError(at + "run " + std::to_string(k) + " belongs to shard " + std::to_string(k % n + 1) +
