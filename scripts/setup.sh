@@ -8,7 +8,7 @@ packages=(
   libembree-dev libtbb-dev          # ray casting, parallel loops
   libeigen3-dev libopencv-dev       # maths, images
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev
 )
 missing=()
 for p in "${packages[@]}"; do
