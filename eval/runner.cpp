@@ -198,7 +198,8 @@ nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
   writeText(out / "scenario.resolved.yaml", resolvedYaml(sc));
   writeJson(out / "metrics.json", metrics);
   say("wrote     " + (out / "metrics.json").string() + ", " + (out / "terrain.png").string() + ", " +
-      (out / "scans").string() + "/, " + (out / "world").string() + "/");
+      (out / "scans").string() + "/, " + (sc.map ? (out / "maps").string() + "/, " : std::string()) +
+      (out / "world").string() + "/");
   return metrics;
 }
 
