@@ -11,11 +11,13 @@
 #include "eval/io.hpp"
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
+#include "test_support.hpp"
 
 namespace ambler::eval {
 namespace {
 
 namespace fs = std::filesystem;
+using test::slurp;
 
 const char* kScenario = R"(
 name: run_test
@@ -35,28 +37,9 @@ views:
   - {xyz_m: [0.5, -3.0, 2.0], rpy_deg: [0, -35, 10]}
 )";
 
-struct TempRun {
-  fs::path dir;
-  TempRun() {
-    static int n = 0;
-    dir = fs::temp_directory_path() / ("ambler-run-" + std::to_string(::getpid()) + "-" + std::to_string(n++));
-  }
-  ~TempRun() {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-  }
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 TEST(Run, WritesEveryScanFileOfTheContract) {
   const Scenario sc = parseScenario(kScenario, "inline.yaml");
-  TempRun run;
+  test::TempDir run;
   const auto metrics = runScenario(sc, {run.dir, false});
   for (const char* f : {"metrics.json", "scenario.resolved.yaml", "terrain.png", "world/world.xml", "world/terrain.bin"})
     EXPECT_TRUE(fs::exists(run.dir / f)) << f;
@@ -92,7 +75,7 @@ TEST(Run, WritesEveryScanFileOfTheContract) {
 // one figure that measures the machine rather than the run).
 TEST(Run, SameSeedGivesByteIdenticalFiles) {
   const Scenario sc = parseScenario(kScenario, "inline.yaml");
-  TempRun a, b;
+  test::TempDir a, b;
   runScenario(sc, {a.dir, false});
   runScenario(sc, {b.dir, false});
   int files = 0;
@@ -112,7 +95,7 @@ TEST(Run, SameSeedGivesByteIdenticalFiles) {
   EXPECT_GT(files, 10);
   Scenario other = sc;
   other.seed = 12;
-  TempRun c;
+  test::TempDir c;
   runScenario(other, {c.dir, false});
   EXPECT_NE(slurp(a.dir / "world/terrain.bin"), slurp(c.dir / "world/terrain.bin"));
   EXPECT_NE(slurp(a.dir / "scans/view_0_range.tiff"), slurp(c.dir / "scans/view_0_range.tiff"));

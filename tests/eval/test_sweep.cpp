@@ -13,11 +13,13 @@
 
 #include "eval/scenario.hpp"
 #include "eval/sweep.hpp"
+#include "test_support.hpp"
 
 namespace ambler::eval {
 namespace {
 
 namespace fs = std::filesystem;
+using test::slurp;
 
 // Small enough that a run takes a fraction of a second: 6 x 6 m plane, 16 x 64 scan, 2 x 2 m map.
 const char* kBase = R"(# a tiny flat scene for sweep tests
@@ -42,27 +44,6 @@ axes:
   sensor.noise_k: [0, 0.0003, 0.001]
 )";
 
-struct TempDir {
-  fs::path dir;
-  TempDir() {
-    static int n = 0;
-    dir = fs::temp_directory_path() /
-          ("ambler-sweep-" + std::to_string(::getpid()) + "-" + std::to_string(n++));
-    fs::create_directories(dir);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-  }
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
 void spit(const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
 
 std::vector<std::string> split(const std::string& text, char sep) {
@@ -81,7 +62,7 @@ std::vector<std::vector<std::string>> rowsOf(const std::string& csv) {
 }
 
 // A sweep directory with the tiny base scenario and a sweep file beside it.
-struct SweepDir : TempDir {
+struct SweepDir : test::TempDir {
   fs::path file;
   explicit SweepDir(const std::string& sweep = kSweep) : file(dir / "sweep.yaml") {
     spit(dir / "base.yaml", kBase);
@@ -367,7 +348,7 @@ TEST(Sweep, ExampleScenariosRoundTrip) {
     const std::string text = slurp(entry.path());
     if (text.find("\nterrain:") == std::string::npos && !text.starts_with("terrain:"))
       continue;  // a sweep file
-    const TempDir t;
+    const test::TempDir t;
     spit(t.dir / "sweep.yaml", "name: rt\nbase: " + entry.path().string() + "\naxes: {seed: [5]}\n");
     const Sweep sweep = loadSweep(t.dir / "sweep.yaml");
     Scenario expected = loadScenario(entry.path());

@@ -15,26 +15,9 @@
 #include "sim/ray_scene.hpp"
 #include "sim/world.hpp"
 #include "terrains/terrain.hpp"
+#include "test_support.hpp"
 
 namespace ambler::test {
-
-class TempDir {
- public:
-  TempDir() {
-    static int counter = 0;
-    path_ = std::filesystem::temp_directory_path() /
-            ("ambler-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
 
 // A world written from `terrain` into a temporary directory and loaded back, with its ray scene.
 struct TerrainWorld {
