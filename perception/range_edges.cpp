@@ -301,20 +301,50 @@ long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise
   // direction, so a linear prediction from two neighbours is nearly exact at any incidence.
   std::vector<double> u(std::size_t(rows) * cols, std::numeric_limits<double>::quiet_NaN());
   auto U = [&](int r, int c) -> double& { return u[std::size_t(r) * cols + c]; };
-  // The near field: the bottom two rows look down at the closest ground, taken as unfolded.
-  for (int r = std::max(0, rows - 2); r < rows; ++r)
-    for (int c = 0; c < cols; ++c) {
-      float& rho = image.range(r, c);
-      if (std::isfinite(rho) && rho > 0) U(r, c) = 1.0 / rho;
-      else rho = std::numeric_limits<float>::quiet_NaN();
+  auto measured = [&](int r, int c) {
+    const float rho = image.range(r, c);
+    return std::isfinite(rho) && rho > 0;  // 0 is a reading too (the top count), but not 1/ρ
+  };
+  // The continuity tolerance on u around a prediction u_pred: kUnwrapSigmas·√6·σ_u.
+  auto tolerance = [&](double u_pred) {
+    return kUnwrapSigmas * std::sqrt(6.0) * noise.sigma(1.0 / u_pred) * u_pred * u_pred;
+  };
+
+  // The seed, taken as unfolded: in the lowest row that has one, the longest run of at least three
+  // pixels, each continuous with the linear prediction from the two before it. A folded stretch
+  // of a continuous surface is continuous in the readings too, but where the surface crosses A
+  // the reading drops from ~A to ~0, which ends a run. So the near-field assumption is only that
+  // the row's longest continuous stretch is nearer than A, not every pixel of the row: on a plane
+  // tilted 45° sideways the bottom row's far end is already past A.
+  int seed_row = -1, seed_begin = 0, seed_end = 0;
+  for (int r = rows - 1; r >= 0 && seed_row < 0; --r) {
+    int begin = 0, best = 2;  // a run needs three pixels: two alone show no continuity
+    for (int c = 0; c <= cols; ++c) {
+      const bool ok = c < cols && measured(r, c);
+      bool continues = ok && c - begin < 2;
+      if (ok && c - begin >= 2) {
+        const double u1 = 1.0 / image.range(r, c - 1), u2 = 1.0 / image.range(r, c - 2);
+        const double u_pred = 2 * u1 - u2;
+        continues = u_pred > 0 && std::abs(1.0 / image.range(r, c) - u_pred) <= tolerance(u_pred);
+      }
+      if (continues) continue;
+      if (c - begin > best) best = c - begin, seed_row = r, seed_begin = begin, seed_end = c;
+      begin = ok ? c : c + 1;
     }
+  }
+  if (seed_row < 0) {  // no continuous stretch anywhere: nothing can be decided
+    image.range.setConstant(kNaN);
+    return 0;
+  }
+  for (int c = seed_begin; c < seed_end; ++c) U(seed_row, c) = 1.0 / image.range(seed_row, c);
+
   long unwrapped = 0;
-  // The multiple n of A that puts the measurement m + nA within `tol` of the predicted 1/ρ — or,
-  // with `jump`, within a factor kUnwrapJumpRatio of the predicted ρ — if exactly one does.
+  // The multiple n of A that puts the measurement m + nA within tolerance of the predicted 1/ρ —
+  // or, with `jump`, within a factor kUnwrapJumpRatio of the predicted ρ — if exactly one does.
   auto decide = [&](int r, int c, double u_pred, bool jump) {
     if (!(u_pred > 0)) return;
     const double m = image.range(r, c), rho_pred = 1.0 / u_pred;
-    const double tol = kUnwrapSigmas * std::sqrt(6.0) * noise.sigma(rho_pred) * u_pred * u_pred;
+    const double tol = tolerance(u_pred);
     const double lo = jump ? rho_pred / kUnwrapJumpRatio : 0;
     const double hi = jump ? rho_pred * kUnwrapJumpRatio : 0;
     const long n_hi = long(std::ceil((std::max(hi, rho_pred) - m) / a)) + 1;
@@ -330,25 +360,33 @@ long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise
     U(r, c) = 1.0 / image.range(r, c);
     unwrapped += best != 0;
   };
-  for (int r = rows - 3; r >= 0; --r) {
+  // Row r from the decided row r + d and r + 2d (d = 1: below, d = −1: above), then along itself.
+  auto unwrapRow = [&](int r, int d) {
     auto open = [&](int c) { return std::isfinite(image.range(r, c)) && std::isnan(U(r, c)); };
-    // Continuity from below, then along the row both ways; `jump` admits discontinuities.
+    auto decided = [&](int rr, int c) { return rr >= 0 && rr < rows && std::isfinite(U(rr, c)); };
+    // Continuity from the row before, then along the row both ways; `jump` admits
+    // discontinuities, and then one decided pixel before suffices (it only sets the scale).
     auto passes = [&](bool jump) {
-      for (int c = 0; c < cols; ++c)
-        if (open(c) && std::isfinite(U(r + 1, c)) && std::isfinite(U(r + 2, c)))
-          decide(r, c, 2 * U(r + 1, c) - U(r + 2, c), jump);
+      for (int c = 0; c < cols; ++c) {
+        if (!open(c) || !decided(r + d, c)) continue;
+        if (decided(r + 2 * d, c)) decide(r, c, 2 * U(r + d, c) - U(r + 2 * d, c), jump);
+        else if (jump) decide(r, c, U(r + d, c), jump);
+      }
       for (int c = 2; c < cols; ++c)
-        if (open(c) && std::isfinite(U(r, c - 1)) && std::isfinite(U(r, c - 2)))
+        if (open(c) && decided(r, c - 1) && decided(r, c - 2))
           decide(r, c, 2 * U(r, c - 1) - U(r, c - 2), jump);
       for (int c = cols - 3; c >= 0; --c)
-        if (open(c) && std::isfinite(U(r, c + 1)) && std::isfinite(U(r, c + 2)))
+        if (open(c) && decided(r, c + 1) && decided(r, c + 2))
           decide(r, c, 2 * U(r, c + 1) - U(r, c + 2), jump);
     };
     passes(false);  // continuous surfaces first: they are the surer path
     passes(true);
     for (int c = 0; c < cols; ++c)
-      if (open(c)) image.range(r, c) = std::numeric_limits<float>::quiet_NaN();
-  }
+      if (open(c)) image.range(r, c) = kNaN;  // never a wrapped range
+  };
+  unwrapRow(seed_row, 1);
+  for (int r = seed_row - 1; r >= 0; --r) unwrapRow(r, 1);
+  for (int r = seed_row + 1; r < rows; ++r) unwrapRow(r, -1);
   return unwrapped;
 }
 

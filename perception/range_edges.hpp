@@ -35,13 +35,15 @@ struct GncConfig {
 // std::invalid_argument for a config out of range.
 EdgeMask detectRangeEdges(const RangeImage& image, const GncConfig& config = {});
 
-// Unwraps ranges folded by the ambiguity interval A, in place. The bottom two rows look down at the
-// near field and are taken as unfolded (ρ < A); each row above takes, per pixel, the multiple of A
-// continuous with a linear prediction from the two unwrapped pixels below, or else from two
-// unwrapped pixels beside it in the same row; failing that, across a depth discontinuity, the one
-// multiple that changes the predicted range by at most a factor 1.5. A pixel no neighbour decides
-// becomes NaN, never a wrapped range. Returns the number of pixels that received a non-zero
-// multiple of A. Throws std::invalid_argument if ambiguity_m is not positive.
+// Unwraps ranges folded by the ambiguity interval A, in place. The seed is the longest continuous
+// stretch of the lowest row that has one (at least three pixels, each continuous with the linear
+// prediction from the two before it), taken as unfolded (ρ < A): the near field. From it, each
+// pixel takes the multiple of A continuous with a linear prediction from the two decided pixels
+// before it in its column (rows upwards from the seed row, downwards below it), or else from two
+// decided pixels beside it in its row; failing that, across a depth discontinuity, the one multiple
+// that changes the predicted range by at most a factor 1.5. A pixel no neighbour decides becomes
+// NaN, never a wrapped range. Returns the number of pixels that received a non-zero multiple of A.
+// Throws std::invalid_argument if ambiguity_m is not positive.
 long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise = {});
 
 }  // namespace ambler::perception

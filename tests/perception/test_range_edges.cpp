@@ -477,6 +477,25 @@ TEST(UnwrapRanges, PlaneBeyondTheAmbiguityInterval) {
   EXPECT_EQ(count, (folds.array() > 0).count());
 }
 
+// The ERIM's measurement of exact ranges, in its order: noise kρ²·n (clamped at 0), the wrap, then
+// whole counts of q (the top count reads 0). Returns each pixel's true multiple of A.
+Eigen::MatrixXi measure(RangeImage& image, std::uint64_t seed, const RangeNoise& noise) {
+  Eigen::MatrixXi folds = Eigen::MatrixXi::Zero(image.rows(), image.cols());
+  Normals normal(seed);
+  for (int r = 0; r < image.rows(); ++r)
+    for (int c = 0; c < image.cols(); ++c) {
+      const double rho = image.range(r, c), e = normal();
+      if (!std::isfinite(rho)) continue;
+      const double m = std::max(0.0, rho + noise.k * rho * rho * e);
+      folds(r, c) = int(std::floor(m / kA));
+      const double q = noise.quantization_m;
+      double counts = q > 0 ? q * std::nearbyint((m - folds(r, c) * kA) / q) : m - folds(r, c) * kA;
+      if (counts >= kA) counts = 0, ++folds(r, c);  // the top count reads 0, as on the ERIM
+      image.range(r, c) = float(counts);
+    }
+  return folds;
+}
+
 // With noise and quantisation (noise, then the wrap, then whole counts, as the ERIM measures), each
 // decided pixel gets exactly its true multiple of A.
 TEST(UnwrapRanges, NoisyPlaneGetsTheTrueFolds) {
@@ -486,19 +505,7 @@ TEST(UnwrapRanges, NoisyPlaneGetsTheTrueFolds) {
     v.rpy.y() = pitch * kDeg;
     const Rendered s = render(planeScene(Vector3d::UnitZ(), 0.0), v);
     RangeImage image = s.image;
-    Eigen::MatrixXi folds = Eigen::MatrixXi::Zero(image.rows(), image.cols());
-    Normals normal(400);
-    for (int r = 0; r < image.rows(); ++r)
-      for (int c = 0; c < image.cols(); ++c) {
-        const double rho = image.range(r, c), e = normal();
-        if (!std::isfinite(rho)) continue;
-        const double m = rho + noise.k * rho * rho * e;
-        folds(r, c) = int(std::floor(m / kA));
-        const double q = noise.quantization_m;
-        double counts = q * std::nearbyint((m - folds(r, c) * kA) / q);
-        if (counts >= kA) counts = 0, ++folds(r, c);  // the top count reads 0, as on the ERIM
-        image.range(r, c) = float(counts);
-      }
+    const Eigen::MatrixXi folds = measure(image, 400, noise);
     const RangeImage measured = image;
     unwrapRanges(image, kA);
     long nan = 0, valid = 0;
@@ -514,9 +521,60 @@ TEST(UnwrapRanges, NoisyPlaneGetsTheTrueFolds) {
         EXPECT_EQ(std::lround(n), folds(r, c)) << r << " " << c;
       }
     // Tolerance 5σ of the prediction: a Gaussian rejects ~6e-7 of the pixels, and quantisation
-    // (at most 2q on a prediction) stays inside it; only the bottom rows' zero readings are lost.
+    // (at most 2q on a prediction) stays inside it.
     EXPECT_LT(double(nan) / valid, 1e-3) << "pitch " << pitch;
   }
+}
+
+// The plane of the experiment's 45° sideways case (docs/experiments/locus_vs_cartesian.md, "The
+// ambiguity edge"), seen as there from 3 m, 30° down: the side that falls away is past A already in
+// the bottom rows, so the near field cannot all be taken as unfolded. Every pixel must come out
+// within 6σ of its true range (σ = q/√12 + kρ² bounds the noise; a fair pixel fails 6σ with
+// probability ~2e-9, a wrong fold is off by 19.5 m) or NaN, and NaN only where the noise is too
+// large for continuity to tell the folds apart. Both directions of the tilt, so that the fold sits at either end of the rows.
+TEST(UnwrapRanges, SidewaysPlaneFoldedInTheBottomRows) {
+  for (double tilt : {45.0, -45.0})
+    for (double k : {0.0, 3e-4, 1e-3})
+      for (std::uint64_t seed : {1, 2, 3}) {
+        if (k == 0 && seed > 1) continue;  // quantisation alone draws nothing
+        SCOPED_TRACE("tilt " + std::to_string(tilt) + " k " + std::to_string(k) + " seed " +
+                     std::to_string(seed));
+        View v;
+        v.xyz = {0, -5.196, 3};
+        v.rpy = {0, -30 * kDeg, 0};
+        v.min_range = 0, v.max_range = 40;  // the ERIM's maximum range
+        // z = −x·tan(tilt): the plane through the origin turned about y.
+        const Vector3d n(std::sin(tilt * kDeg), 0, std::cos(tilt * kDeg));
+        const Rendered s = render(planeScene(n, 0.0), v);
+        const RangeNoise noise{k, 0.0762};
+        RangeImage image = s.image;
+        const Eigen::MatrixXi folds = measure(image, 500 + seed, noise);
+        const int bottom = image.rows() - 1;
+        ASSERT_GT((folds.row(bottom).array() > 0).count(), 2) << "the bottom row must be folded";
+        unwrapRanges(image, kA, noise);
+        // Continuity accepts the fold within 5√6σ_u of the prediction: a window ≈ 2·5√6·σ(ρ)
+        // wide in range, which holds two folds once that reaches A (at k = 1e-3 past ~28 m).
+        // Below that every fold of a plane is decided.
+        auto decidable = [&](double t) { return 2 * 5 * std::sqrt(6.0) * noise.sigma(t) < kA; };
+        long folded = 0, nan = 0, decidable_folded = 0, decidable_nan = 0;
+        for (int r = 0; r < image.rows(); ++r)
+          for (int c = 0; c < image.cols(); ++c) {
+            if (!s.image.valid(r, c)) continue;
+            const bool d = decidable(s.image.range(r, c));
+            folded += folds(r, c) > 0, decidable_folded += d && folds(r, c) > 0;
+            if (!image.valid(r, c)) {
+              ++nan, decidable_nan += d;
+              continue;
+            }
+            const double t = s.image.range(r, c);
+            EXPECT_LE(std::abs(image.range(r, c) - t), 6 * noise.sigma(t)) << r << " " << c;
+          }
+        EXPECT_GT(decidable_folded, 300);  // hundreds of folded pixels to decide, in every case
+        EXPECT_EQ(decidable_nan, 0);
+        RecordProperty("nan_tilt" + std::to_string(int(tilt)) + "_k" + std::to_string(k) + "_s" +
+                           std::to_string(seed),
+                       std::to_string(nan) + " of " + std::to_string(folded) + " folded");
+      }
 }
 
 // A 2 m cliff seen from 3 m above its top multiplies the range by 5/3 at its edge, beyond the
