@@ -55,89 +55,21 @@ bool insidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector
 }  // namespace
 
 // One evaluation of Δ = ρ_l − I at a scan angle: where it looked and with what weights.
-struct Sample {
+struct LocusSample {
   bool valid = false;   // the line is in front of the sensor, inside the image, all pixels returned
   unsigned edges = 0;   // bit k: pixel k (of the 2×2 cell, weighted) is an occluding-edge pixel
-  double delta = 0, s = 0, rho = 0, theta = 0;
   int r0 = 0, c0 = 0;   // the top-left pixel of the 2×2 cell
-  double w[4] = {0, 0, 0, 0};  // bilinear weights of (r0,c0), (r0,c0+1), (r0+1,c0), (r0+1,c0+1)
+  double delta = 0, s = 0, rho = 0;
+  double cf = 0;          // the column coordinate (θ − θ0)/Δθ
+  double fr = 0, fc = 0;  // the position inside the cell: bilinear weights (1−fr)(1−fc), (1−fr)fc, …
 };
-
-LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const LocusConfig& config)
-    : image_(image), edges_(edges), config_(config), T_SW_(image.T_WS.inverse()) {
-  if (image.rows() < 2 || image.cols() < 2)
-    throw std::invalid_argument("LocusMapper: the range image needs at least 2x2 pixels");
-  if (edges && (edges->rows() != image.rows() || edges->cols() != image.cols()))
-    throw std::invalid_argument("LocusMapper: the edge mask and the range image differ in size");
-  phi0_ = image.phi[0];
-  dphi_ = image.phi[0] - image.phi[1];
-  theta0_ = image.theta[0];
-  dtheta_ = image.theta[1] - image.theta[0];
-  if (!(dphi_ > 0) || !(dtheta_ > 0) || !checkEven(image.phi, -dphi_) || !checkEven(image.theta, dtheta_))
-    throw std::invalid_argument("LocusMapper: scan angles must be evenly spaced, φ falling, θ rising");
-  up_ = T_SW_.linear() * Eigen::Vector3d::UnitZ();
-  // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1], 1024 steps; g is smooth).
-  const double h2 = 2 * config.roughness_hurst;
-  for (int i = 0; i <= 1024; ++i) {
-    const double f = i / 1024.0;
-    roughness_g_.push_back((std::pow(f, h2) * (1 - f) + std::pow(1 - f, h2) * f - f * (1 - f)) /
-                           (4 - std::pow(2.0, h2)));
-  }
-  for (double phi : image.phi) {
-    sin_phi_.push_back(std::sin(phi));
-    cos_phi_.push_back(std::cos(phi));
-  }
-  for (double theta : image.theta) {
-    sin_theta_.push_back(std::sin(theta));
-    cos_theta_.push_back(std::cos(theta));
-  }
-  for (int r = 0; r < image.rows(); ++r)
-    for (int c = 0; c < image.cols(); ++c)
-      if (image.valid(r, c)) bounds_.extend(image.pointWorld(r, c));
-  if (!bounds_.isEmpty()) {
-    bounds_.min().array() -= config.z_margin_m;
-    bounds_.max().array() += config.z_margin_m;
-  }
-}
+using Sample = LocusSample;
 
 namespace {
 
-// Δ at fractional row rf (scan angle with sin sp, cos cp) for the sensor-frame line a + s·b.
-Sample evaluate(const RangeImage& img, const EdgeMask* edges, double theta0, double dtheta, double rf,
-                double sp, double cp, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  Sample out;
-  // The point of the line on the plane of scan angle φ: z·cosφ − y·sinφ = 0.
-  const double den = b.z() * cp - b.y() * sp;
-  if (std::abs(den) < 1e-15) return out;
-  out.s = -(a.z() * cp - a.y() * sp) / den;
-  const Eigen::Vector3d p = a + out.s * b;
-  if (p.y() * cp + p.z() * sp <= 0) return out;  // behind the sensor
-  out.rho = p.norm();
-  // Single precision is ample here (≈ 4e-8 rad, a few 1e-7 m of range) and asinf costs a third.
-  out.theta = std::asin(std::clamp(float(p.x() / out.rho), -1.0f, 1.0f));
-  const double cf = (out.theta - theta0) / dtheta;
-  const int rows = img.rows(), cols = img.cols();
-  if (!(cf >= 0.0 && cf <= cols - 1) || !(rf >= 0.0 && rf <= rows - 1)) return out;
-  out.r0 = std::min(int(rf), rows - 2);
-  out.c0 = std::min(int(cf), cols - 2);
-  const double fr = rf - out.r0, fc = cf - out.c0;
-  out.w[0] = (1 - fr) * (1 - fc);
-  out.w[1] = (1 - fr) * fc;
-  out.w[2] = fr * (1 - fc);
-  out.w[3] = fr * fc;
-  double I = 0;
-  for (int k = 0; k < 4; ++k) {
-    if (out.w[k] == 0.0) continue;  // a pixel with no weight is not used, returned or not
-    const int r = out.r0 + k / 2, c = out.c0 + k % 2;
-    const float range = img.range(r, c);
-    if (!std::isfinite(range)) return out;  // never bridge a pixel that returned nothing
-    I += out.w[k] * range;
-    if (edges && (*edges)(r, c)) out.edges |= 1u << k;
-  }
-  out.delta = out.rho - I;
-  out.valid = true;
-  return out;
-}
+constexpr std::uint8_t kAllReturned = 16;
+constexpr int kAsinTableSize = 2048;  // intervals of x over [−1, 1]
+constexpr double kAsinTableMax = 0.95;  // beyond |x| = 0.95 (72°), std::asin
 
 // Sines and cosines of the scan angles, so eq. 1 needs no libm call per pixel.
 struct AngleTables {
@@ -175,14 +107,10 @@ Eigen::Vector3d localNormal(const RangeImage& img, const AngleTables& angles, in
   return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : up;
 }
 
-// The variance of linear interpolation between samples of a rough surface, as a range error at
-// fraction f. The surface between pixels is modelled as fractional Brownian motion with Hurst
-// exponent H: for samples h apart, Var[interpolation error] = σ²h^2H·g(f), with
-// g(f) = f^2H(1−f) + (1−f)^2H·f − f(1−f), and the second difference D = a(−1) − 2a(0) + a(+1) has
-// E[D²] = σ²h^2H·(4 − 2^2H) plus the noise's 6σ_p² (docs/locus.md). D² is averaged over the
-// second differences centred on both samples and both sides of the cell.
-double roughnessVariance(const RangeImage& img, int r0, int c0, bool across_rows, double f, double var_pixel,
-                         const std::vector<double>& g_table) {
+// The mean squared second difference D = a(−1) − 2a(0) + a(+1) of the ranges around the 2×2 cell
+// at (r0, c0), across scanlines or along them: over the differences centred on both samples of
+// both pixel lines bounding the cell. NaN if none is available.
+double meanSecondDifference2(const RangeImage& img, int r0, int c0, bool across_rows) {
   double sum = 0;
   int n = 0;
   for (int side = 0; side < 2; ++side)    // the two pixel lines bounding the cell
@@ -200,41 +128,25 @@ double roughnessVariance(const RangeImage& img, int r0, int c0, bool across_rows
       sum += d * d;
       ++n;
     }
-  if (n == 0) return 0.0;
+  return n == 0 ? kNaN : sum / n;
+}
+
+// The variance of linear interpolation between samples of a rough surface, as a range error at
+// fraction f. The surface between pixels is modelled as fractional Brownian motion with Hurst
+// exponent H: for samples h apart, Var[interpolation error] = σ²h^2H·g(f), with
+// g(f) = f^2H(1−f) + (1−f)^2H·f − f(1−f), and the second difference has
+// E[D²] = σ²h^2H·(4 − 2^2H) plus the noise's 6σ_p² (docs/locus.md).
+double roughnessVariance(double mean_d2, double f, double var_pixel, const std::vector<double>& g_table) {
+  if (std::isnan(mean_d2)) return 0.0;
   const double x = std::clamp(f, 0.0, 1.0) * double(g_table.size() - 1);
   const std::size_t i = std::min(std::size_t(x), g_table.size() - 2);
   const double g = g_table[i] + (x - double(i)) * (g_table[i + 1] - g_table[i]);
-  return g * std::max(0.0, sum / n - 6.0 * var_pixel);
-}
-
-}  // namespace
-
-// σ of the position along the line (docs/locus.md): the range error of the interpolated image —
-// the pixels' noise, σ_p² = (kρ²)² + q²/12, weighted by Σw², plus the surface's roughness between
-// pixels that interpolation cannot know — carried along the beam d onto the local surface
-// (normal n) and from there onto the line b: σ_s = σ_I·|d·n| / |b·n|.
-double LocusMapper::sigmaAlongLine(int r0, int c0, const double* w, double rho, const Eigen::Vector3d& p,
-                                   const Eigen::Vector3d& b) const {
-  const double sum_w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + w[3] * w[3];
-  const double noise = config_.noise_k * rho * rho;
-  const double var_pixel = noise * noise + config_.quantization_m * config_.quantization_m / 12.0;
-  const double fr = w[2] + w[3], fc = w[1] + w[3];
-  const double rough = !config_.roughness ? 0.0
-                                           : roughnessVariance(image_, r0, c0, true, fr, var_pixel, roughness_g_) +
-                                                 roughnessVariance(image_, r0, c0, false, fc, var_pixel, roughness_g_);
-  const double var_rho = var_pixel * sum_w2 + rough;
-  const Eigen::Vector3d n = localNormal(image_, {sin_phi_, cos_phi_, sin_theta_, cos_theta_}, r0, c0, up_);
-  const Eigen::Vector3d d = p / rho;
-  return std::sqrt(var_rho) * std::abs(d.dot(n)) / std::max(std::abs(b.dot(n)), 0.05);
-}
-
-LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
-  return intersect(u, v, nullptr);
+  return g * std::max(0.0, mean_d2 - 6.0 * var_pixel);
 }
 
 // sin and cos of φ_r − δ for |δ| within a scanline (≤ 0.01 rad): angle addition with Taylor series
 // of sin δ and cos δ to δ⁵ and δ⁶ (error < 1e-16), cheaper than a libm call per evaluation.
-static void sinCosNear(double sr, double cr, double delta, double& sp, double& cp) {
+void sinCosNear(double sr, double cr, double delta, double& sp, double& cp) {
   const double d2 = delta * delta;
   const double sd = delta * (1 - d2 / 6 * (1 - d2 / 20));
   const double cd = 1 - d2 / 2 * (1 - d2 / 12 * (1 - d2 / 30));
@@ -242,13 +154,184 @@ static void sinCosNear(double sr, double cr, double delta, double& sp, double& c
   cp = cr * cd + sr * sd;
 }
 
+}  // namespace
+
+LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const LocusConfig& config)
+    : image_(image), edges_(edges), config_(config), T_SW_(image.T_WS.inverse()), rows_(image.rows()),
+      cols_(image.cols()) {
+  if (rows_ < 2 || cols_ < 2)
+    throw std::invalid_argument("LocusMapper: the range image needs at least 2x2 pixels");
+  if (edges && (edges->rows() != rows_ || edges->cols() != cols_))
+    throw std::invalid_argument("LocusMapper: the edge mask and the range image differ in size");
+  phi0_ = image.phi[0];
+  dphi_ = image.phi[0] - image.phi[1];
+  theta0_ = image.theta[0];
+  dtheta_ = image.theta[1] - image.theta[0];
+  if (!(dphi_ > 0) || !(dtheta_ > 0) || !checkEven(image.phi, -dphi_) || !checkEven(image.theta, dtheta_))
+    throw std::invalid_argument("LocusMapper: scan angles must be evenly spaced, φ falling, θ rising");
+  up_ = T_SW_.linear() * Eigen::Vector3d::UnitZ();
+  // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1], 1024 steps; g is smooth).
+  const double h2 = 2 * config.roughness_hurst;
+  for (int i = 0; i <= 1024; ++i) {
+    const double f = i / 1024.0;
+    roughness_g_.push_back((std::pow(f, h2) * (1 - f) + std::pow(1 - f, h2) * f - f * (1 - f)) /
+                           (4 - std::pow(2.0, h2)));
+  }
+  for (double phi : image.phi) {
+    sin_phi_.push_back(std::sin(phi));
+    cos_phi_.push_back(std::cos(phi));
+  }
+  for (double theta : image.theta) {
+    sin_theta_.push_back(std::sin(theta));
+    cos_theta_.push_back(std::cos(theta));
+  }
+  inv_dtheta_ = 1.0 / dtheta_;
+  last_row_ = rows_ - 1;
+  last_col_ = cols_ - 1;
+  column_of_ = AsinTable(theta0_, inv_dtheta_);
+  row_of_ = AsinTable(phi0_, -1.0 / dphi_);
+  for (int r = 0; r < rows_; ++r)
+    for (int c = 0; c < cols_; ++c)
+      if (image.valid(r, c)) bounds_.extend(image.pointWorld(r, c));
+  if (!bounds_.isEmpty()) {
+    bounds_.min().array() -= config.z_margin_m;
+    bounds_.max().array() += config.z_margin_m;
+  }
+  // Per 2×2 cell: which pixels returned and which are edge pixels, and the inputs of σ.
+  cell_flags_.assign(std::size_t(rows_ - 1) * (cols_ - 1), 0);
+  cell_sigma_.resize(cell_flags_.size());
+  const AngleTables angles{sin_phi_, cos_phi_, sin_theta_, cos_theta_};
+  tbb::parallel_for(tbb::blocked_range<int>(0, rows_ - 1), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r)
+      for (int c = 0; c + 1 < cols_; ++c) {
+        std::uint8_t flags = kAllReturned;
+        for (int k = 0; k < 4; ++k) {
+          const int rr = r + k / 2, cc = c + k % 2;
+          if (!image.valid(rr, cc)) flags &= ~kAllReturned;
+          if (edges && (*edges)(rr, cc)) flags |= std::uint8_t(1u << k);
+        }
+        cell_flags_[cellIndex(r, c)] = flags;
+        CellSigma& cs = cell_sigma_[cellIndex(r, c)];
+        cs.normal = localNormal(image, angles, r, c, up_);
+        cs.d2_rows = config.roughness ? meanSecondDifference2(image, r, c, true) : kNaN;
+        cs.d2_cols = config.roughness ? meanSecondDifference2(image, r, c, false) : kNaN;
+      }
+  });
+}
+
+// asin as a quadratic Taylor polynomial about the middle of each of 2048 intervals of x: the
+// cubic term, (1 + 2x²)/(1 − x²)^(5/2)·d³/6 with |d| ≤ 1/2048, is below 2e-10 rad for
+// |x| ≤ sin 45° and 2e-8 rad at the table's end (asinf errs by 6e-8).
+LocusMapper::AsinTable::AsinTable(double offset_, double scale_) : offset(offset_), scale(scale_) {
+  for (int k = 0; k < kAsinTableSize; ++k) {
+    const double x = -1.0 + (k + 0.5) * (2.0 / kAsinTableSize), q = 1.0 - x * x;
+    polys.push_back({x, (std::asin(x) - offset) * scale, scale / std::sqrt(q), scale * x / (2.0 * q * std::sqrt(q))});
+  }
+}
+
+double LocusMapper::AsinTable::operator()(double x) const {
+  if (!(std::abs(x) <= kAsinTableMax)) return (std::asin(std::clamp(x, -1.0, 1.0)) - offset) * scale;
+  const Poly& e = polys[std::size_t((x + 1.0) * (kAsinTableSize / 2))];
+  const double d = x - e.x;
+  return e.c0 + d * (e.c1 + d * e.c2);
+}
+
+Sample LocusMapper::evaluate(const Line& l, double rf, double sp, double cp) const {
+  Sample out;
+  // The point of the line on the plane of scan angle φ: z·cosφ − y·sinφ = 0.
+  const double den = l.b.z() * cp - l.b.y() * sp;
+  if (std::abs(den) < 1e-15) return out;
+  out.s = -(l.a.z() * cp - l.a.y() * sp) / den;
+  const Eigen::Vector3d p = l.a + out.s * l.b;
+  if (p.y() * cp + p.z() * sp <= 0) return out;  // behind the sensor
+  out.rho = p.norm();
+  out.cf = column_of_(p.x() / out.rho);
+  const double cf = out.cf;
+  if (!(cf >= 0.0 && cf <= last_col_) || !(rf >= 0.0 && rf <= last_row_)) return out;
+  out.r0 = std::min(int(rf), rows_ - 2);
+  out.c0 = std::min(int(cf), cols_ - 2);
+  out.fr = rf - out.r0;
+  out.fc = cf - out.c0;
+  const float* px = image_.range.data() + std::size_t(out.r0) * cols_ + out.c0;
+  const unsigned flags = cell_flags_[cellIndex(out.r0, out.c0)];
+  const double gr = 1 - out.fr, gc = 1 - out.fc;
+  if (flags & kAllReturned) {  // the common case: all four pixels returned
+    out.delta = out.rho - (gr * (gc * px[0] + out.fc * px[1]) + out.fr * (gc * px[cols_] + out.fc * px[cols_ + 1]));
+    if (flags & 15u) {  // edge pixels: only those with weight count (bit k of `used`: w_k ≠ 0)
+      const unsigned rows_used = (gr != 0.0 ? 3u : 0u) | (out.fr != 0.0 ? 12u : 0u);
+      const unsigned cols_used = (gc != 0.0 ? 5u : 0u) | (out.fc != 0.0 ? 10u : 0u);
+      out.edges = flags & rows_used & cols_used;
+    }
+    out.valid = true;
+    return out;
+  }
+  const double w[4] = {gr * gc, gr * out.fc, out.fr * gc, out.fr * out.fc};
+  const double q[4] = {px[0], px[1], px[cols_], px[cols_ + 1]};
+  double I = 0;
+  for (int k = 0; k < 4; ++k) {
+    if (w[k] == 0.0) continue;  // a pixel with no weight is not used, returned or not
+    if (!std::isfinite(q[k])) return out;  // never bridge a pixel that returned nothing
+    I += w[k] * q[k];
+    out.edges |= flags & (1u << k);
+  }
+  out.delta = out.rho - I;
+  out.valid = true;
+  return out;
+}
+
+double LocusMapper::slope(const Line& l, int r, int r_cell, const Sample& m) const {
+  const double sp = sin_phi_[r], cp = cos_phi_[r];
+  const double den = l.b.z() * cp - l.b.y() * sp;
+  const double dnum = -l.a.z() * sp - l.a.y() * cp, dden = -l.b.z() * sp - l.b.y() * cp;
+  const double ds = -(dnum + m.s * dden) / den;  // s = −N/D, so s' = −(N' + s·D')/D
+  const Eigen::Vector3d p = l.a + m.s * l.b;
+  const double drho = p.dot(l.b) * ds / m.rho;
+  const double lateral = std::sqrt(p.y() * p.y() + p.z() * p.z());  // ρ·cos θ
+  const double dtheta = (l.b.x() * ds * m.rho - p.x() * drho) / (m.rho * lateral);
+  const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + m.c0;
+  const double fr = r - r_cell, fc = m.fc;
+  const double top = (1 - fc) * px[0] + fc * px[1], bottom = (1 - fc) * px[cols_] + fc * px[cols_ + 1];
+  const double dI_dfr = bottom - top, dI_dfc = (1 - fr) * (px[1] - px[0]) + fr * (px[cols_ + 1] - px[cols_]);
+  // Rows run down as φ falls: dfr/dφ = −1/Δφ; dfc/dφ = θ'/Δθ.
+  return drho - (dI_dfr * (-1.0 / dphi_) + dI_dfc * dtheta * inv_dtheta_);
+}
+
+Sample LocusMapper::atRow(const Line& l, int r) const { return evaluate(l, r, sin_phi_[r], cos_phi_[r]); }
+
+Sample LocusMapper::atPhi(const Line& l, int r_ref, double phi) const {
+  double sp, cp;
+  sinCosNear(sin_phi_[r_ref], cos_phi_[r_ref], image_.phi[r_ref] - phi, sp, cp);
+  return evaluate(l, (phi0_ - phi) / dphi_, sp, cp);
+}
+
+// σ of the position along the line (docs/locus.md): the range error of the interpolated image —
+// the pixels' noise, σ_p² = (kρ²)² + q²/12, weighted by Σw², plus the surface's roughness between
+// pixels that interpolation cannot know — carried along the beam d onto the local surface
+// (normal n) and from there onto the line b: σ_s = σ_I·|d·n| / |b·n|.
+double LocusMapper::sigmaAlongLine(const Sample& at, const Eigen::Vector3d& p, const Eigen::Vector3d& b) const {
+  const double w[4] = {(1 - at.fr) * (1 - at.fc), (1 - at.fr) * at.fc, at.fr * (1 - at.fc), at.fr * at.fc};
+  const double sum_w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + w[3] * w[3];
+  const double noise = config_.noise_k * at.rho * at.rho;
+  const double var_pixel = noise * noise + config_.quantization_m * config_.quantization_m / 12.0;
+  const CellSigma& cs = cell_sigma_[cellIndex(at.r0, at.c0)];
+  const double rough = roughnessVariance(cs.d2_rows, at.fr, var_pixel, roughness_g_) +
+                       roughnessVariance(cs.d2_cols, at.fc, var_pixel, roughness_g_);
+  const double var_rho = var_pixel * sum_w2 + rough;
+  const Eigen::Vector3d d = p / at.rho;
+  return std::sqrt(var_rho) * std::abs(d.dot(cs.normal)) / std::max(std::abs(b.dot(cs.normal)), 0.05);
+}
+
+LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
+  return intersect(u, v, nullptr);
+}
+
 LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v, int* hint) const {
   LocusHit hit;
-  const Eigen::Vector3d a = T_SW_ * u, b = T_SW_.linear() * v;
-  const int rows = image_.rows();
+  const Line line{T_SW_ * u, T_SW_.linear() * v};
+  const int rows = rows_;
   auto at = [&](int r) {
     ++hit.evaluations;
-    return evaluate(image_, edges_, theta0_, dtheta_, r, sin_phi_[r], cos_phi_[r], a, b);
+    return atRow(line, r);
   };
 
   // Stage 1: two neighbouring scanlines between which Δ turns from negative (the line in front of
@@ -282,15 +365,39 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
   if (r1 < 0) {
     double s_lo, s_hi;
     if (bounds_.isEmpty() || !clipToBox(bounds_, u, v, s_lo, s_hi)) return hit;
+    // Keep the part of the segment between the image's sides, x/ρ = k with k = sin θ of the first
+    // and last columns. Along a line, p̂ sweeps a great circle monotonically, so x/ρ = e_x·p̂ has
+    // at most one extremum: the segment crosses a side at most twice, where
+    // (a_x + s·b_x)² = k²·|a + s·b|² with a_x + s·b_x of the sign of k (a quadratic in s).
+    for (const bool left : {true, false}) {
+      const double k = left ? sin_theta_.front() : sin_theta_.back();
+      const Eigen::Vector3d& a = line.a;
+      const Eigen::Vector3d& b = line.b;
+      const auto outside = [&](double s) {
+        const Eigen::Vector3d p = a + s * b;
+        return left ? p.x() < k * p.norm() : p.x() > k * p.norm();
+      };
+      const double qa = b.x() * b.x() - k * k * b.squaredNorm(), qb = 2 * (a.x() * b.x() - k * k * a.dot(b));
+      const double qc = a.x() * a.x() - k * k * a.squaredNorm(), disc = qb * qb - 4 * qa * qc;
+      double cuts[2];
+      int n = 0;
+      if (qa != 0 && disc >= 0)
+        for (const double root : {(-qb - std::sqrt(disc)) / (2 * qa), (-qb + std::sqrt(disc)) / (2 * qa)})
+          if (root > s_lo && root < s_hi && (a.x() + root * b.x()) * k >= 0) cuts[n++] = root;
+      if (n == 2 && cuts[0] > cuts[1]) std::swap(cuts[0], cuts[1]);
+      const bool out_lo = outside(s_lo), out_hi = outside(s_hi);
+      if (n == 0 && out_lo && out_hi) return hit;  // wholly beside the image
+      if (n > 0 && out_lo) s_lo = cuts[0];
+      if (n > 0 && out_hi) s_hi = cuts[n - 1];
+    }
     // Scan angles of the segment's ends; φ(s) is monotonic along a line.
-    const Eigen::Vector3d top = a + s_hi * b, bottom = a + s_lo * b;
-    // A line wholly to one side of the field of view meets no pixel: θ = asin(x/ρ) of both ends
-    // beyond the same image edge (θ is monotonic along the segment's projection too).
-    const double t_top = std::asin(top.x() / top.norm()), t_bottom = std::asin(bottom.x() / bottom.norm());
-    const double t_last = theta0_ + dtheta_ * (image_.cols() - 1);
-    if ((t_top < theta0_ && t_bottom < theta0_) || (t_top > t_last && t_bottom > t_last)) return hit;
-    const double rf_top = (phi0_ - std::atan2(top.z(), top.y())) / dphi_;
-    const double rf_bottom = (phi0_ - std::atan2(bottom.z(), bottom.y())) / dphi_;
+    const Eigen::Vector3d top = line.a + s_hi * line.b, bottom = line.a + s_lo * line.b;
+    // The row coordinates of the ends: φ = atan2(z, y), = asin(z/√(y² + z²)) in front (y > 0).
+    const auto rowOf = [&](const Eigen::Vector3d& p) {
+      return p.y() > 0 ? row_of_(p.z() / std::sqrt(p.y() * p.y() + p.z() * p.z()))
+                       : (phi0_ - std::atan2(p.z(), p.y())) / dphi_;
+    };
+    const double rf_top = rowOf(top), rf_bottom = rowOf(bottom);
     const int step = rf_bottom >= rf_top ? 1 : -1;
     int r = step > 0 ? std::max(int(std::ceil(rf_top)), 0) : std::min(int(std::floor(rf_top)), rows - 1);
     const int r_end = step > 0 ? int(std::floor(rf_bottom)) : int(std::ceil(rf_bottom));
@@ -315,100 +422,171 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
   }
   if (hint) *hint = std::min(r1, r2);
 
-  // Stage 2: search between the two scanlines until the bracket in φ is below ε.
-  const double phi_r1 = image_.phi[r1];
-  double phi1 = phi_r1, phi2 = image_.phi[r2];
-  double d1 = s1.delta, d2 = s2.delta;
+  // Stage 2: search between the two scanlines until the bracket in φ is below ε. The bracket is
+  // [lo, hi] with Δ(lo) < 0 ≤ Δ(hi). Each step is a safeguarded estimate of the root: the chord
+  // (regula falsi) first, then inverse quadratic interpolation through the last three points
+  // (Δ(φ) is smooth within a pixel cell, so it lands within ~1e-7 rad), or halving whenever the
+  // previous step failed to halve the bracket. Once an estimate can be trusted (an interpolation
+  // through three points), Δ is evaluated ε/2 to either side of it — two independent
+  // evaluations — and the bracket usually closes below ε at once. `bisection: true` halves
+  // every step, as the paper does.
+  const double eps = config_.epsilon_rad;
+  double phi_lo = image_.phi[r1], phi_hi = image_.phi[r2];
+  Sample lo = s1, hi = s2;
+  double phi_x = 0, d_x = 0;  // the third point: the end most recently dropped from the bracket
+  bool have_x = false;
+  auto eval = [&](double phi) {
+    ++hit.evaluations;
+    return atPhi(line, r1, phi);
+  };
+  // Narrow the bracket with m at phi; false if m has no valid value (then the cell is unknown).
+  auto take = [&](double phi, const Sample& m) {
+    if (!m.valid) return false;
+    if (m.delta < 0) {
+      phi_x = phi_lo, d_x = lo.delta;
+      phi_lo = phi, lo = m;
+    } else {
+      phi_x = phi_hi, d_x = hi.delta;
+      phi_hi = phi, hi = m;
+    }
+    have_x = true;
+    return true;
+  };
+  // Δ ε/2 (less a hair, so that the pair spans < ε) to either side of an estimate: two
+  // independent evaluations that usually close the bracket at once. false: a pixel without a
+  // return was reached (the cell is then unknown).
+  auto probePair = [&](double phi) {
+    const double h = 0.499 * eps;
+    double pa = phi - h, pb = phi + h;  // pa: the one nearer lo
+    if (std::abs(pa - phi_lo) > std::abs(pb - phi_lo)) std::swap(pa, pb);
+    const bool in_a = (pa - phi_lo) * (pa - phi_hi) < 0, in_b = (pb - phi_lo) * (pb - phi_hi) < 0;
+    if (!in_a && !in_b) return take(phi, eval(phi));
+    const Sample ma = in_a ? eval(pa) : Sample{}, mb = in_b ? eval(pb) : Sample{};
+    if ((in_a && !ma.valid) || (in_b && !mb.valid)) return false;
+    if (in_a && in_b && ma.delta < 0 && mb.delta < 0) {  // taken in the order that narrows most
+      take(pa, ma), take(pb, mb);
+    } else {
+      if (in_b) take(pb, mb);
+      if (in_a) take(pa, ma);
+    }
+    return true;
+  };
+  const double first = config_.bisection ? kNaN : hermiteEstimate(line, r1, r2, lo, hi);
+  double width_before = std::numeric_limits<double>::infinity();  // the width two steps ago
+  for (int it = 0; it < 200 && std::abs(phi_hi - phi_lo) >= eps && hi.delta != 0.0; ++it) {
+    const double width = std::abs(phi_hi - phi_lo);
+    double phi = 0.5 * (phi_lo + phi_hi);
+    bool trusted = false;
+    if (it == 0 && !std::isnan(first)) {
+      phi = first, trusted = true;
+    } else if (!config_.bisection && !(width > 0.5 * width_before)) {
+      // Halve instead when the last two steps together did not halve the bracket (Brent's
+      // safeguard); otherwise inverse quadratic interpolation through the last three points,
+      // or the chord.
+      const double a = phi_lo, fa = lo.delta, b = phi_hi, fb = hi.delta;
+      double est = a - fa * (b - a) / (fb - fa);
+      if (have_x && d_x != fa && d_x != fb) {
+        const double c = phi_x, fc = d_x;
+        const double iqi = a * fb * fc / ((fa - fb) * (fa - fc)) + b * fa * fc / ((fb - fa) * (fb - fc)) +
+                           c * fa * fb / ((fc - fa) * (fc - fb));
+        if ((iqi - a) * (iqi - b) < 0) est = iqi, trusted = true;
+      }
+      if ((est - a) * (est - b) < 0) phi = est;
+    }
+    if (!(trusted && width >= 2 * eps ? probePair(phi) : take(phi, eval(phi))))
+      return hit;  // the bracket reaches a pixel without a return: unknown
+    width_before = width;
+  }
+  finish(line, u, v, r1, r2, s1, s2, phi_lo, lo, phi_hi, hi, hit);
+  return hit;
+}
+
+double LocusMapper::hermiteEstimate(const Line& l, int r1, int r2, const Sample& s1, const Sample& s2) const {
+  // Only when the line stays inside one returned 2×2 cell between the scanlines: I is then one
+  // bilinear patch and Δ(φ) smooth, and the cubic's root is within ~1e-8 rad of Δ's.
+  const int r_cell = std::min(r1, r2);
+  if (s1.c0 != s2.c0 || !(cell_flags_[cellIndex(r_cell, s1.c0)] & kAllReturned) || !(s1.delta < 0 && s2.delta > 0))
+    return kNaN;
+  const double phi1 = image_.phi[r1], h = image_.phi[r2] - phi1;
+  const double y0 = s1.delta, y1 = s2.delta;
+  const double m0 = slope(l, r1, r_cell, s1) * h, m1 = slope(l, r2, r_cell, s2) * h;
+  const double c2 = -3 * y0 - 2 * m0 + 3 * y1 - m1, c3 = 2 * y0 + m0 - 2 * y1 + m1;
+  // Newton on the cubic from the chord, kept inside the part of [0, 1] where it changes sign.
+  // Newton converges quadratically: once a step is below 1e-6 (of the scanline spacing) the next
+  // would be ~1e-12.
+  double t = y0 / (y0 - y1), t_neg = 0, t_pos = 1;
+  for (int k = 0; k < 10; ++k) {
+    const double H = y0 + t * (m0 + t * (c2 + t * c3)), dH = m0 + t * (2 * c2 + 3 * t * c3);
+    (H < 0 ? t_neg : t_pos) = t;
+    double next = dH != 0.0 ? t - H / dH : 0.5 * (t_neg + t_pos);
+    if (!((next - t_neg) * (next - t_pos) < 0)) next = 0.5 * (t_neg + t_pos);
+    const bool converged = std::abs(next - t) < 1e-6;
+    t = next;
+    if (converged) break;
+  }
+  return phi1 + t * h;
+}
+
+void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen::Vector3d& v, int r1, int r2,
+                         const Sample& s1, const Sample& s2, double phi_lo, const Sample& lo, double phi_hi,
+                         const Sample& hi, LocusHit& hit) const {
+  // The final bracket's chord root (its midpoint under plain bisection), and what the line has
+  // there: s, ρ and θ vary linearly across a bracket narrower than ε; σ and the edge test use the
+  // bracket end nearer the root.
+  const double phi = config_.bisection || hi.delta == lo.delta
+                         ? 0.5 * (phi_lo + phi_hi)
+                         : phi_lo - lo.delta * (phi_hi - phi_lo) / (hi.delta - lo.delta);
+  const double t = phi_hi == phi_lo ? 0.0 : (phi - phi_lo) / (phi_hi - phi_lo);
+  const Sample& near = t <= 0.5 ? lo : hi;
+  // Where the point is in the image: in the 2×2 cell between the bracket's two scanlines.
+  const int r_cell = std::min(r1, r2);
+  Sample where = near;
+  where.rho = lo.rho + t * (hi.rho - lo.rho);
+  where.cf = lo.cf + t * (hi.cf - lo.cf);
+  where.r0 = r_cell;
+  where.fr = std::clamp((phi0_ - phi) / dphi_ - r_cell, 0.0, 1.0);
+  where.c0 = std::clamp(int(where.cf), 0, cols_ - 2);
+  where.fc = std::clamp(where.cf - where.c0, 0.0, 1.0);
+
   // The crossing is at an occluding edge when edge pixels lie on both sides of it — on both
   // scanlines of the bracket, or in both columns of the final cell. Edge pixels come in pairs
   // across a discontinuity, so a visible point beside one (on a ledge's lip) has edge pixels on
-  // one side only and stays known.
+  // one side only and stays known. Which way the final cell's discontinuity runs: edge pixels
+  // mark both sides of a break but not its direction, so compare the cell's largest range jump
+  // across scanlines with that across columns.
   const bool row1_edge = s1.edges != 0, row2_edge = s2.edges != 0;
-  Sample last = s2;
-  int kept_side = 0;
-  auto evalPhi = [&](double phi) {
-    double sp, cp;
-    sinCosNear(sin_phi_[r1], cos_phi_[r1], phi_r1 - phi, sp, cp);
-    ++hit.evaluations;
-    return evaluate(image_, edges_, theta0_, dtheta_, (phi0_ - phi) / dphi_, sp, cp, a, b);
-  };
-  auto take = [&](double phi, const Sample& m) {  // narrow the bracket to the side m is on
-    last = m;
-    if (m.delta < 0) {
-      phi1 = phi, d1 = m.delta;
-      if (kept_side == -1) d2 *= 0.5;  // Illinois: the far end stayed twice, halve it
-      kept_side = -1;
-    } else {
-      phi2 = phi, d2 = m.delta;
-      if (kept_side == 1) d1 *= 0.5;
-      kept_side = 1;
-    }
-  };
-  const double eps = config_.epsilon_rad;
-  for (int it = 0; it < 200 && std::abs(phi2 - phi1) >= eps && d2 != 0.0; ++it) {
-    double phi = 0.5 * (phi1 + phi2);
-    if (!config_.bisection) {
-      const double secant = phi1 - d1 * (phi2 - phi1) / (d2 - d1);
-      const double lo = std::min(phi1, phi2), hi = std::max(phi1, phi2);
-      if (secant > lo && secant < hi) phi = secant;
-    }
-    const Sample m = evalPhi(phi);
-    if (!m.valid) return hit;  // the bracket reaches a pixel without a return: unknown
-    take(phi, m);
-    // Within a pixel cell Δ(φ) is nearly linear, so a secant step lands within ε of the root:
-    // probe ε/2 to its far side, and the bracket closes to below ε in one more evaluation.
-    if (!config_.bisection && std::abs(phi2 - phi1) >= eps) {
-      const double toward = m.delta < 0 ? phi2 : phi1;
-      const double probe = phi + std::copysign(0.499 * eps, toward - phi);
-      if ((probe - phi1) * (probe - phi2) < 0) {
-        const Sample q = evalPhi(probe);
-        if (!q.valid) return hit;
-        take(probe, q);
-      }
-    }
-  }
-  // Which way the final cell's discontinuity runs: edge pixels mark both sides of a break but not
-  // its direction, so compare the cell's largest range jump across scanlines with that across
-  // columns.
-  const unsigned e = last.edges;
+  const unsigned e = near.edges;
   double jump_rows = 0, jump_cols = 0;
-  if (e) {
-    const auto rng = [&](int k) { return double(image_.range(last.r0 + k / 2, last.c0 + k % 2)); };
-    if (image_.valid(last.r0, last.c0) && image_.valid(last.r0, last.c0 + 1) &&
-        image_.valid(last.r0 + 1, last.c0) && image_.valid(last.r0 + 1, last.c0 + 1)) {
-      jump_rows = std::max(std::abs(rng(0) - rng(2)), std::abs(rng(1) - rng(3)));
-      jump_cols = std::max(std::abs(rng(0) - rng(1)), std::abs(rng(2) - rng(3)));
-    }
+  if (e && (cell_flags_[cellIndex(near.r0, near.c0)] & kAllReturned)) {
+    const auto rng = [&](int k) { return double(image_.range(near.r0 + k / 2, near.c0 + k % 2)); };
+    jump_rows = std::max(std::abs(rng(0) - rng(2)), std::abs(rng(1) - rng(3)));
+    jump_cols = std::max(std::abs(rng(0) - rng(1)), std::abs(rng(2) - rng(3)));
   }
   const bool across_rows = (row1_edge && row2_edge) || ((e & 3u) && (e & 12u) && jump_rows >= jump_cols);
   const bool across_cols = (e & 5u) && (e & 10u) && jump_cols > jump_rows;
   if (across_rows || across_cols) {
     hit.state = CellState::Shadow;  // the locus meets the image at an occluding edge
-    return hit;
+    return;
   }
-  // The root of the final bracket's chord (its midpoint under plain bisection).
-  const double phi =
-      config_.bisection || d2 == d1 ? 0.5 * (phi1 + phi2) : phi1 - d1 * (phi2 - phi1) / (d2 - d1);
-  const Sample f = evalPhi(phi);
-  const Sample& fin = f.valid ? f : last;
   hit.state = CellState::Known;
-  hit.s = fin.s;
-  hit.point = u + fin.s * v;
+  hit.s = lo.s + t * (hi.s - lo.s);
+  hit.point = u + hit.s * v;
   hit.phi = phi;
-  hit.theta = fin.theta;
-  hit.rho = fin.rho;
-  hit.sigma = sigmaAlongLine(fin.r0, fin.c0, fin.w, fin.rho, a + fin.s * b, b);
-  return hit;
+  hit.theta = theta0_ + dtheta_ * where.cf;
+  hit.rho = where.rho;
+  hit.sigma = sigmaAlongLine(where, line.a + hit.s * line.b, line.b);
 }
 
 ElevationMap LocusMapper::map(const MapGrid& grid) const {
   ElevationMap out(grid);
+  const Eigen::Vector3d v = Eigen::Vector3d::UnitZ();
   tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& rows) {
     for (int r = rows.begin(); r != rows.end(); ++r) {
       int hint = -1;  // the previous cell's scanline: neighbours cross the image close together
       for (int c = 0; c < grid.cols; ++c) {
         const Eigen::Vector2d xy = grid.center(r, c);
-        const LocusHit hit = intersect({xy.x(), xy.y(), 0.0}, Eigen::Vector3d::UnitZ(), &hint);
+        const Eigen::Vector3d u(xy.x(), xy.y(), 0.0);
+        const LocusHit hit = intersect(u, v, &hint);
         if (hit.state == CellState::Known) out.setKnown(r, c, float(hit.point.z()), float(hit.sigma));
         else out.setUnknown(r, c, hit.state);
       }

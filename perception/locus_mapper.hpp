@@ -4,6 +4,7 @@
 // any resolution, any sensor orientation. Range shadows (§3.2) come from an edge mask of the
 // image; each result carries σ along the line from the sensor's noise model (§3.3, docs/locus.md).
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -33,9 +34,13 @@ struct LocusHit {
   int evaluations = 0;                                      // Δ evaluations spent
 };
 
+struct LocusSample;
+
 class LocusMapper {
  public:
-  // `image` (and `edges`, if given: same size) must outlive the mapper. Throws
+  // `image` (and `edges`, if given: same size) must outlive the mapper. Construction tabulates,
+  // once per image and in parallel, what every search needs per 2×2 pixel cell (which pixels
+  // returned, which are edge pixels, the local normal and roughness of σ). Throws
   // std::invalid_argument if the image's scan angles are not evenly spaced or sizes differ.
   LocusMapper(const RangeImage& image, const EdgeMask* edges, const LocusConfig& config = {});
 
@@ -56,20 +61,64 @@ class LocusMapper {
   ElevationMap mapPolygon(const std::vector<Eigen::Vector2d>& polygon, double cell_m) const;
 
  private:
+  struct Line {
+    Eigen::Vector3d a, b;  // the line a + s·b in the sensor frame
+  };
+  // Per 2×2 pixel cell (r0, c0): the inputs of σ (docs/locus.md) — the local normal in the sensor
+  // frame and the mean squared second difference of the ranges across scanlines and along them
+  // (NaN: none available).
+  struct CellSigma {
+    Eigen::Vector3d normal;
+    double d2_rows, d2_cols;
+  };
+
   // The same, starting the scanline search at *hint (a neighbouring line's crossing) and
   // updating it; hint may be null.
   LocusHit intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v, int* hint) const;
-  double sigmaAlongLine(int r0, int c0, const double* w, double rho, const Eigen::Vector3d& p,
-                        const Eigen::Vector3d& b) const;
+  // Δ = ρ_line − I at fractional row rf, whose scan angle has sine sp and cosine cp.
+  LocusSample evaluate(const Line& l, double rf, double sp, double cp) const;
+  // dΔ/dφ at a sample taken on scanline r, with I bilinear on the 2×2 cell whose top row is r_cell.
+  double slope(const Line& l, int r, int r_cell, const LocusSample& m) const;
+  // (asin(x) − offset)·scale, tabulated (see the constructor): the column coordinate
+  // (θ − θ0)/Δθ of a direction with sin θ = x, and the row coordinate (φ0 − φ)/Δφ of one with
+  // sin φ = x in its scan plane.
+  struct AsinTable {
+    struct Poly {
+      double x, c0, c1, c2;  // ≈ c0 + c1·(x' − x) + c2·(x' − x)² near x
+    };
+    double offset = 0, scale = 1;
+    std::vector<Poly> polys;
+    AsinTable() = default;
+    AsinTable(double offset, double scale);
+    double operator()(double x) const;
+  };
+  LocusSample atRow(const Line& l, int r) const;
+  LocusSample atPhi(const Line& l, int r_ref, double phi) const;
+  double sigmaAlongLine(const LocusSample& at, const Eigen::Vector3d& p, const Eigen::Vector3d& b) const;
+  // The first estimate of the root between scanlines r1 (sample s1, Δ < 0) and r2 = r1 ± 1 (s2,
+  // Δ > 0): the root of their Hermite cubic, or NaN where that does not apply.
+  double hermiteEstimate(const Line& l, int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
+  // The end of a search: the final bracket [lo, hi] (narrower than ε) inside the scanline bracket
+  // (r1, s1; r2, s2) of the line u + s·v, classified (known or shadow) and written into `hit`.
+  void finish(const Line& l, const Eigen::Vector3d& u, const Eigen::Vector3d& v, int r1, int r2,
+              const LocusSample& s1, const LocusSample& s2, double phi_lo, const LocusSample& lo,
+              double phi_hi, const LocusSample& hi, LocusHit& hit) const;
+  int cellIndex(int r0, int c0) const { return r0 * (cols_ - 1) + c0; }
 
   const RangeImage& image_;
   const EdgeMask* edges_;
   LocusConfig config_;
   Eigen::Isometry3d T_SW_;
   Eigen::Vector3d up_;  // world z in the sensor frame
+  int rows_, cols_;
   std::vector<double> roughness_g_;  // the fBm interpolation factor, tabulated over f
   double phi0_, dphi_, theta0_, dtheta_;
+  double inv_dtheta_;
+  double last_row_, last_col_;  // rows − 1 and cols − 1: the largest fractional row and column
   std::vector<double> sin_phi_, cos_phi_, sin_theta_, cos_theta_;
+  AsinTable column_of_, row_of_;
+  std::vector<std::uint8_t> cell_flags_;  // per 2×2 cell: bits 0–3 edge pixels, bit 4 all returned
+  std::vector<CellSigma> cell_sigma_;
   Eigen::AlignedBox3d bounds_;  // world bounds of the returns, ± margin
 };
 
