@@ -527,6 +527,30 @@ double LocusMapper::hermiteEstimate(const Line& l, int r1, int r2, const Sample&
   return phi1 + t * h;
 }
 
+// Between the last scanline that sees the near side of an occluding edge and the first that sees
+// past it, each surface goes on unseen: the near one up to its edge, the far one back to where
+// the edge's shadow on it ends, both somewhere in that gap. Where exactly the image cannot tell;
+// the nearest-sample rule gives each surface the half of the gap next to its own samples. A line
+// that meets a surface, extended linearly (range against row) from its last two samples, within
+// its half of the gap may be on it — visible, but not sampled — or just in the shadow beside
+// it: such a cell is unseen, neither known nor a range shadow.
+bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Sample& s2) const {
+  const double i1 = s1.rho - s1.delta, i2 = s2.rho - s2.delta;  // the image's ranges on the line
+  const double rho_mid = 0.5 * (s1.rho + s2.rho);  // the line's range midway between the scanlines
+  for (const bool first : {true, false}) {  // the surface sampled at r1, then the one at r2
+    const int r_side = first ? r1 : r2, r_other = first ? r2 : r1;
+    const Sample& side = first ? s1 : s2;
+    const int r_next = 2 * r_side - r_other;  // one scanline further from the edge, on that side
+    if (r_next < 0 || r_next >= rows_) continue;
+    const double q0 = image_.range(r_next, side.c0), q1 = image_.range(r_next, side.c0 + 1);
+    if (!std::isfinite(q0) || !std::isfinite(q1)) continue;
+    const double i_side = first ? i1 : i2, i_next = (1 - side.fc) * q0 + side.fc * q1;
+    const double i_mid = i_side + 0.5 * (i_side - i_next);  // that surface extended half a scanline
+    if ((side.delta < 0) != (rho_mid - i_mid < 0)) return true;
+  }
+  return false;
+}
+
 void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen::Vector3d& v, int r1, int r2,
                          const Sample& s1, const Sample& s2, double phi_lo, const Sample& lo, double phi_hi,
                          const Sample& hi, LocusHit& hit) const {
@@ -564,6 +588,10 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   }
   const bool across_rows = (row1_edge && row2_edge) || ((e & 3u) && (e & 12u) && jump_rows >= jump_cols);
   const bool across_cols = (e & 5u) && (e & 10u) && jump_cols > jump_rows;
+  if (across_rows && meetsSurfaceInGap(r1, r2, s1, s2)) {
+    hit.state = CellState::Unseen;  // on a surface past its last sample, or in the shadow beside it
+    return;
+  }
   if (across_rows || across_cols) {
     hit.state = CellState::Shadow;  // the locus meets the image at an occluding edge
     return;

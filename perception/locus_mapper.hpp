@@ -98,6 +98,9 @@ class LocusMapper {
   // The first estimate of the root between scanlines r1 (sample s1, Δ < 0) and r2 = r1 ± 1 (s2,
   // Δ > 0): the root of their Hermite cubic, or NaN where that does not apply.
   double hermiteEstimate(const Line& l, int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
+  // At an occluding edge across the scanlines r1 (s1) and r2 = r1 ± 1 (s2): does the line meet
+  // either surface, extended past its last sample, between the two scanlines?
+  bool meetsSurfaceInGap(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
   // The end of a search: the final bracket [lo, hi] (narrower than ε) inside the scanline bracket
   // (r1, s1; r2, s2) of the line u + s·v, classified (known or shadow) and written into `hit`.
   void finish(const Line& l, const Eigen::Vector3d& u, const Eigen::Vector3d& v, int r1, int r2,

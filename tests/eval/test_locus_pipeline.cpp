@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <numbers>
@@ -66,34 +67,39 @@ terrains::TerrainSpec ledge() {
 }
 
 // Behind a 0.4 m ledge the locus map marks the range shadow: precision and recall ≥ 0.9 against
-// ground-truth visibility, and no truly hidden cell is reported known with an error above 3σ_z.
-// DISABLED: not met yet (issue 3 stays open). Measured: recall 1.00, precision 0.87 — the cells
-// on the ledge top between its lip and the first scanline that sees the top (one scanline's
-// footprint, 13 cm here) have no sample, their locus crosses the image at the jump and they are
-// marked shadow although ground truth calls them visible. Run with
-// --gtest_also_run_disabled_tests to see the figures.
-TEST(LocusPipeline, DISABLED_LedgeCastsAShadowThatTheMapFinds) {
+// ground-truth visibility, and no truly hidden cell is reported known with an error above 3σ_z —
+// from several places on the ledge top, noise-free and noisy. Cells in the gap between the last
+// scanline that sees the top and the first that sees past the lip are unseen, not shadow
+// (docs/locus.md): each surface goes on unsampled into the half of that gap next to it.
+TEST(LocusPipeline, LedgeCastsAShadowThatTheMapFinds) {
   const Bench bench(ledge(), 1);
-  ViewSpec view;
-  view.xyz_m = {5, 0, 3.4};
-  view.rpy_rad = {0, -30 * kDeg, 90 * kDeg};  // from the top of the ledge looking down it, towards −x
-  MapSpec map;
-  map.cell_m = 0.05;
-  map.x_m = {-6, 4};
-  map.y_m = {-4, 4};
-  for (const bool noisy : {false, true}) {
-    SensorSpec sensor;
-    sensor.mixed_pixels = false;
-    if (!noisy) sensor.noise_k = 0, sensor.quantization_m = 0;
-    const MapMetrics m = bench.run(sensor, view, map, 3);
-    EXPECT_GT(m.hidden, 500) << "the scene must have a real shadow";
-    EXPECT_GE(m.shadow_precision, 0.9) << (noisy ? "noisy" : "noise-free");
-    EXPECT_GE(m.shadow_recall, 0.9) << (noisy ? "noisy" : "noise-free");
-    if (noisy) {
-      EXPECT_EQ(m.known_in_shadow_above_3sigma, 0);
+  struct View {
+    Eigen::Vector3d xyz_m, rpy_deg;
+  };
+  // From the top of the ledge looking down it, towards −x: straight, from higher and lower, and
+  // askew.
+  for (const View& v : {View{{5, 0, 3.4}, {0, -30, 90}}, View{{4, -1, 4.4}, {0, -40, 80}},
+                        View{{7, 1, 2.4}, {0, -18, 100}}}) {
+    ViewSpec view;
+    view.xyz_m = v.xyz_m;
+    view.rpy_rad = v.rpy_deg * kDeg;
+    MapSpec map;
+    map.cell_m = 0.05;
+    map.x_m = {-6, 4};
+    map.y_m = {-4, 4};
+    for (const bool noisy : {false, true}) {
+      SensorSpec sensor;
+      sensor.mixed_pixels = false;
+      if (!noisy) sensor.noise_k = 0, sensor.quantization_m = 0;
+      const MapMetrics m = bench.run(sensor, view, map, 3);
+      const std::string what = std::string(noisy ? "noisy" : "noise-free") + " from x = " + std::to_string(v.xyz_m.x());
+      EXPECT_GT(m.hidden, 500) << what << ": the scene must have a real shadow";
+      EXPECT_GE(m.shadow_precision, 0.9) << what;
+      EXPECT_GE(m.shadow_recall, 0.9) << what;
+      EXPECT_EQ(m.known_in_shadow_above_3sigma, 0) << what;
+      std::printf("ledge %s: hidden %ld, shadow precision %.3f recall %.3f\n", what.c_str(), long(m.hidden),
+                  m.shadow_precision, m.shadow_recall);
     }
-    RecordProperty(noisy ? "noisy_precision" : "clean_precision", std::to_string(m.shadow_precision));
-    RecordProperty(noisy ? "noisy_recall" : "clean_recall", std::to_string(m.shadow_recall));
   }
 }
 
