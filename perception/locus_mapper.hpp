@@ -16,7 +16,7 @@ namespace ambler::perception {
 
 struct LocusConfig {
   double epsilon_rad = 1e-5;  // the search stops when the bracket in φ is narrower than this
-  bool bisection = false;     // true: plain bisection as in the paper; false: Illinois steps
+  bool bisection = false;     // true: plain bisection as in the paper; false: Hermite, IQI steps
                               // (the same bracket and stopping rule, fewer evaluations)
   double noise_k = 3e-4;      // σ_ρ = k·ρ² of the sensor, for σ along the line
   double quantization_m = 0.0762;  // adds q²/12 to the range variance; 0 = none
