@@ -92,6 +92,74 @@ TEST(LocusMapper, ResolutionIndependent) {
   EXPECT_GT(shared, 3000);
 }
 
+// The field of view: on a noise-free plane, every cell whose line the image covers where it meets
+// the surface — the line's points on the two scanlines around the crossing both between the
+// outermost pixel centres, with a tenth of a pixel to spare — is known, and no cell whose surface
+// point lies outside the image is. For a level sensor and for rolled and yawed ones, whose
+// vertical lines run slantwise through the image and leave it through its sides (the search clips
+// each line to the part between the sides: docs/locus.md).
+TEST(LocusMapper, KnownExactlyWhereTheImageCoversTheSurface) {
+  const Plane plane{0.05, 0.1, 0.0};
+  for (const Eigen::Vector3d& rpy : {Eigen::Vector3d(0, -30, 0), Eigen::Vector3d(20, -35, 25), Eigen::Vector3d(-15, -25, -40)}) {
+    const Eigen::Isometry3d T = sensorPose({0.3, -6, 3}, rpy * kDeg);
+    const auto img = planeImage(plane, T);
+    const LocusMapper mapper(img, nullptr, noiseFree());
+    const auto grid = MapGrid::covering(-14, 14, -6, 16, 0.1);
+    const ElevationMap map = mapper.map(grid);
+    const double dphi = img.phi[0] - img.phi[1], dtheta = img.theta[1] - img.theta[0];
+    int inside = 0, outside = 0;
+    for (int r = 0; r < grid.rows; ++r)
+      for (int c = 0; c < grid.cols; ++c) {
+        const Eigen::Vector2d xy = grid.center(r, c);
+        const Spherical q = cartesianToSpherical(T.inverse() * Eigen::Vector3d(xy.x(), xy.y(), plane.z(xy.x(), xy.y())));
+        const double rf = (img.phi[0] - q.phi) / dphi, cf = (q.theta - img.theta[0]) / dtheta;
+        // The line's column on the scan planes of rows r and r + 1 around the crossing.
+        const auto columnOnRow = [&](int row) {
+          const Eigen::Vector3d a = T.inverse() * Eigen::Vector3d(xy.x(), xy.y(), 0.0), b = T.linear().transpose().col(2);
+          const double sp = std::sin(img.phi[row]), cp = std::cos(img.phi[row]);
+          const Eigen::Vector3d p = a - (a.z() * cp - a.y() * sp) / (b.z() * cp - b.y() * sp) * b;
+          return (cartesianToSpherical(p).theta - img.theta[0]) / dtheta;
+        };
+        const int r0 = int(std::floor(rf));
+        const bool in = rf > 0.1 && rf < img.rows() - 1.1 && q.rho < 40 &&
+                        std::min(columnOnRow(r0), columnOnRow(r0 + 1)) > 0.1 &&
+                        std::max(columnOnRow(r0), columnOnRow(r0 + 1)) < img.cols() - 1.1;
+        const bool out = rf < -0.1 || rf > img.rows() - 0.9 || cf < -0.1 || cf > img.cols() - 0.9 || q.rho > 40;
+        if (in) {
+          EXPECT_EQ(map.stateAt(r, c), CellState::Known) << "cell " << xy.transpose() << " rpy " << rpy.transpose();
+          ++inside;
+        }
+        if (out) {
+          EXPECT_NE(map.stateAt(r, c), CellState::Known) << "cell " << xy.transpose() << " rpy " << rpy.transpose();
+          ++outside;
+        }
+      }
+    EXPECT_GT(inside, 5000);
+    EXPECT_GT(outside, 5000);
+  }
+}
+
+// The paper's plain bisection and the default steps close the same bracket below the same ε: the
+// maps agree to the bound of ResolutionIndependent.
+TEST(LocusMapper, BisectionAndDefaultStepsAgree) {
+  const Plane plane{0.1, 0.2, 0.0};
+  const auto img = planeImage(plane, sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}));
+  LocusConfig halving = noiseFree();
+  halving.bisection = true;
+  const auto grid = MapGrid::covering(-4, 4, -2, 8, 0.10);
+  const auto fast = LocusMapper(img, nullptr, noiseFree()).map(grid);
+  const auto paper = LocusMapper(img, nullptr, halving).map(grid);
+  int known = 0;
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      ASSERT_EQ(fast.stateAt(r, c), paper.stateAt(r, c));
+      if (fast.stateAt(r, c) != CellState::Known) continue;
+      EXPECT_NEAR(fast.elevation()(r, c), paper.elevation()(r, c), 3e-4);
+      ++known;
+    }
+  EXPECT_GT(known, 3000);
+}
+
 // A pixel that returned nothing is never bridged: every known cell's final interpolation uses
 // returned pixels only, and the cells whose locus crosses the hole are not known.
 TEST(LocusMapper, UnreturnedPixelsNeverMakeKnownCells) {
