@@ -4,6 +4,8 @@
 // any resolution, any sensor orientation. Range shadows (§3.2) come from an edge mask of the
 // image; each result carries σ along the line from the sensor's noise model (§3.3, docs/locus.md).
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <vector>
@@ -90,7 +92,14 @@ class LocusMapper {
     std::vector<Poly> polys;
     AsinTable() = default;
     AsinTable(double offset, double scale);
-    double operator()(double x) const;
+    double operator()(double x) const {
+      if (!(std::abs(x) <= kMax)) return (std::asin(std::clamp(x, -1.0, 1.0)) - offset) * scale;
+      const Poly& e = polys[std::size_t((x + 1.0) * (kSize / 2))];
+      const double d = x - e.x;
+      return e.c0 + d * (e.c1 + d * e.c2);
+    }
+    static constexpr int kSize = 2048;     // intervals of x over [−1, 1]
+    static constexpr double kMax = 0.95;   // beyond |x| = 0.95 (72°), std::asin
   };
   LocusSample atRow(const Line& l, int r) const;
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;

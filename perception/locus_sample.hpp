@@ -20,8 +20,6 @@ namespace locus {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::uint8_t kAllReturned = 16;
-constexpr int kAsinTableSize = 2048;  // intervals of x over [−1, 1]
-constexpr double kAsinTableMax = 0.95;  // beyond |x| = 0.95 (72°), std::asin
 
 }  // namespace locus
 

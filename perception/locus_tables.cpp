@@ -166,18 +166,12 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
 // cubic term, (1 + 2x²)/(1 − x²)^(5/2)·d³/6 with |d| ≤ 1/2048, is below 2e-10 rad for
 // |x| ≤ sin 45° and 2e-8 rad at the table's end (asinf errs by 6e-8).
 LocusMapper::AsinTable::AsinTable(double offset_, double scale_) : offset(offset_), scale(scale_) {
-  for (int k = 0; k < kAsinTableSize; ++k) {
-    const double x = -1.0 + (k + 0.5) * (2.0 / kAsinTableSize), q = 1.0 - x * x;
+  for (int k = 0; k < AsinTable::kSize; ++k) {
+    const double x = -1.0 + (k + 0.5) * (2.0 / AsinTable::kSize), q = 1.0 - x * x;
     polys.push_back({x, (std::asin(x) - offset) * scale, scale / std::sqrt(q), scale * x / (2.0 * q * std::sqrt(q))});
   }
 }
 
-double LocusMapper::AsinTable::operator()(double x) const {
-  if (!(std::abs(x) <= kAsinTableMax)) return (std::asin(std::clamp(x, -1.0, 1.0)) - offset) * scale;
-  const Poly& e = polys[std::size_t((x + 1.0) * (kAsinTableSize / 2))];
-  const double d = x - e.x;
-  return e.c0 + d * (e.c1 + d * e.c2);
-}
 
 // σ of the position along the line (docs/locus.md): the range error of the interpolated image —
 // the pixels' noise, σ_p² = (kρ²)² + q²/12, weighted by Σw², plus the surface's roughness between
