@@ -24,25 +24,47 @@ bool checkEven(const std::vector<double>& a, double step) {
   return true;
 }
 
-// Sines and cosines of the scan angles, so eq. 1 needs no libm call per pixel.
-struct AngleTables {
-  const std::vector<double>& sin_phi;
-  const std::vector<double>& cos_phi;
-  const std::vector<double>& sin_theta;
-  const std::vector<double>& cos_theta;
-};
+// Per pixel, once per image: its surface point in the sensor frame (eq. 1) and the squared
+// second differences D² = (a(−1) − 2a(0) + a(+1))² of the ranges centred on it, across scanlines
+// and along them (NaN where a pixel of the three did not return or is off the image).
+struct PixelTables {
+  int rows, cols;
+  std::vector<Eigen::Vector3d> point;
+  std::vector<char> returned;
+  std::vector<double> d2_rows, d2_cols;
 
-// A surface point of the image in the sensor frame (eq. 1), if that pixel returned.
-bool pixelPoint(const RangeImage& img, const AngleTables& t, int r, int c, Eigen::Vector3d& p) {
-  if (r < 0 || c < 0 || r >= img.rows() || c >= img.cols() || !img.valid(r, c)) return false;
-  const double rho = img.range(r, c), ct = t.cos_theta[c];
-  p = Eigen::Vector3d(rho * t.sin_theta[c], rho * t.cos_phi[r] * ct, rho * t.sin_phi[r] * ct);
-  return true;
-}
+  PixelTables(const RangeImage& img, const std::vector<double>& sin_phi, const std::vector<double>& cos_phi,
+              const std::vector<double>& sin_theta, const std::vector<double>& cos_theta)
+      : rows(img.rows()), cols(img.cols()), point(std::size_t(rows) * cols), returned(point.size()),
+        d2_rows(point.size()), d2_cols(point.size()) {
+    const auto range = [&](int r, int c) {
+      return r < 0 || c < 0 || r >= rows || c >= cols ? kNaN : double(img.range(r, c));
+    };
+    tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const tbb::blocked_range<int>& rs) {
+      for (int r = rs.begin(); r != rs.end(); ++r)
+        for (int c = 0; c < cols; ++c) {
+          const std::size_t i = std::size_t(r) * cols + c;
+          returned[i] = img.valid(r, c);
+          const double rho = img.range(r, c), ct = cos_theta[c];
+          point[i] = Eigen::Vector3d(rho * sin_theta[c], rho * cos_phi[r] * ct, rho * sin_phi[r] * ct);
+          const double d_rows = range(r - 1, c) - 2 * range(r, c) + range(r + 1, c);
+          const double d_cols = range(r, c - 1) - 2 * range(r, c) + range(r, c + 1);
+          d2_rows[i] = d_rows * d_rows;  // NaN propagates: a missing pixel makes no difference
+          d2_cols[i] = d_cols * d_cols;
+        }
+    });
+  }
+  // The surface point of pixel (r, c), if it is on the image and returned.
+  bool pixelPoint(int r, int c, Eigen::Vector3d& p) const {
+    if (r < 0 || c < 0 || r >= rows || c >= cols || !returned[std::size_t(r) * cols + c]) return false;
+    p = point[std::size_t(r) * cols + c];
+    return true;
+  }
+};
 
 // The local surface normal (sensor frame) around the 2×2 cell at (r0, c0), from the widest
 // returned span across it in each image direction (wider spans average out range noise).
-Eigen::Vector3d localNormal(const RangeImage& img, const AngleTables& angles, int r0, int c0, const Eigen::Vector3d& up) {
+Eigen::Vector3d localNormal(const PixelTables& px, int r0, int c0, const Eigen::Vector3d& up) {
   Eigen::Vector3d t[2];
   bool ok[2] = {false, false};
   for (int dir = 0; dir < 2; ++dir)
@@ -50,9 +72,9 @@ Eigen::Vector3d localNormal(const RangeImage& img, const AngleTables& angles, in
       for (int k = 0; k < 2 && !ok[dir]; ++k) {
         Eigen::Vector3d p = Eigen::Vector3d::Zero(), q = Eigen::Vector3d::Zero();
         if (dir == 0)  // along the scanline (θ)
-          ok[dir] = pixelPoint(img, angles, r0 + k, c0 - span / 2, p) && pixelPoint(img, angles, r0 + k, c0 + 1 + (span + 1) / 2, q);
+          ok[dir] = px.pixelPoint(r0 + k, c0 - span / 2, p) && px.pixelPoint(r0 + k, c0 + 1 + (span + 1) / 2, q);
         else  // across scanlines (φ)
-          ok[dir] = pixelPoint(img, angles, r0 - span / 2, c0 + k, p) && pixelPoint(img, angles, r0 + 1 + (span + 1) / 2, c0 + k, q);
+          ok[dir] = px.pixelPoint(r0 - span / 2, c0 + k, p) && px.pixelPoint(r0 + 1 + (span + 1) / 2, c0 + k, q);
         if (ok[dir]) t[dir] = q - p;
       }
   if (!ok[0] || !ok[1]) return up;
@@ -60,25 +82,18 @@ Eigen::Vector3d localNormal(const RangeImage& img, const AngleTables& angles, in
   return n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : up;
 }
 
-// The mean squared second difference D = a(−1) − 2a(0) + a(+1) of the ranges around the 2×2 cell
-// at (r0, c0), across scanlines or along them: over the differences centred on both samples of
-// both pixel lines bounding the cell. NaN if none is available.
-double meanSecondDifference2(const RangeImage& img, int r0, int c0, bool across_rows) {
+// The mean squared second difference of the ranges around the 2×2 cell at (r0, c0), across
+// scanlines or along them: over the differences centred on both samples of both pixel lines
+// bounding the cell. NaN if none is available.
+double meanSecondDifference2(const PixelTables& px, int r0, int c0, bool across_rows) {
   double sum = 0;
   int n = 0;
-  for (int side = 0; side < 2; ++side)    // the two pixel lines bounding the cell
+  for (int side = 0; side < 2; ++side)            // the two pixel lines bounding the cell
     for (int centre = 0; centre < 2; ++centre) {  // second differences centred on each sample
-      double a[3];
-      bool ok = true;
-      for (int k = 0; k < 3 && ok; ++k) {
-        const int rr = across_rows ? r0 + centre + k - 1 : r0 + side;
-        const int cc = across_rows ? c0 + side : c0 + centre + k - 1;
-        ok = rr >= 0 && cc >= 0 && rr < img.rows() && cc < img.cols() && img.valid(rr, cc);
-        if (ok) a[k] = img.range(rr, cc);
-      }
-      if (!ok) continue;
-      const double d = a[0] - 2 * a[1] + a[2];
-      sum += d * d;
+      const int r = across_rows ? r0 + centre : r0 + side, c = across_rows ? c0 + side : c0 + centre;
+      const double d2 = (across_rows ? px.d2_rows : px.d2_cols)[std::size_t(r) * px.cols + c];
+      if (std::isnan(d2)) continue;
+      sum += d2;
       ++n;
     }
   return n == 0 ? kNaN : sum / n;
@@ -133,9 +148,9 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   last_col_ = cols_ - 1;
   column_of_ = AsinTable(theta0_, inv_dtheta_);
   row_of_ = AsinTable(phi0_, -1.0 / dphi_);
-  for (int r = 0; r < rows_; ++r)
-    for (int c = 0; c < cols_; ++c)
-      if (image.valid(r, c)) bounds_.extend(image.pointWorld(r, c));
+  const PixelTables pixels(image, sin_phi_, cos_phi_, sin_theta_, cos_theta_);
+  for (std::size_t i = 0; i < pixels.point.size(); ++i)
+    if (pixels.returned[i]) bounds_.extend(image.T_WS * pixels.point[i]);
   if (!bounds_.isEmpty()) {
     bounds_.min().array() -= config.z_margin_m;
     bounds_.max().array() += config.z_margin_m;
@@ -143,7 +158,6 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   // Per 2×2 cell: which pixels returned and which are edge pixels, and the inputs of σ.
   cell_flags_.assign(std::size_t(rows_ - 1) * (cols_ - 1), 0);
   cell_sigma_.resize(cell_flags_.size());
-  const AngleTables angles{sin_phi_, cos_phi_, sin_theta_, cos_theta_};
   tbb::parallel_for(tbb::blocked_range<int>(0, rows_ - 1), [&](const tbb::blocked_range<int>& rows) {
     for (int r = rows.begin(); r != rows.end(); ++r)
       for (int c = 0; c + 1 < cols_; ++c) {
@@ -155,9 +169,9 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
         }
         cell_flags_[cellIndex(r, c)] = flags;
         CellSigma& cs = cell_sigma_[cellIndex(r, c)];
-        cs.normal = localNormal(image, angles, r, c, up_);
-        cs.d2_rows = config.roughness ? meanSecondDifference2(image, r, c, true) : kNaN;
-        cs.d2_cols = config.roughness ? meanSecondDifference2(image, r, c, false) : kNaN;
+        cs.normal = localNormal(pixels, r, c, up_);
+        cs.d2_rows = config.roughness ? meanSecondDifference2(pixels, r, c, true) : kNaN;
+        cs.d2_cols = config.roughness ? meanSecondDifference2(pixels, r, c, false) : kNaN;
       }
   });
 }
