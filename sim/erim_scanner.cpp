@@ -6,12 +6,14 @@
 #include <array>
 #include <cstdint>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 
 #include "perception/sensor_geometry.hpp"
+#include "sim/erim_kernel.hpp"
 #include "sim/ray_scene.hpp"
 #include "terrains/random.hpp"
 
@@ -64,77 +66,8 @@ AngleTable angleTable(const perception::RangeImage& img, double dphi, double dth
 
 }  // namespace
 
-namespace {
-
-// The measurement model with its reciprocals precomputed: a division costs more than the rest.
-struct Measurement {
-  double k, ambiguity, inv_ambiguity, q, inv_q;
-  explicit Measurement(const ErimConfig& c)
-      : k(c.noise_k),
-        ambiguity(c.ambiguity_m),
-        inv_ambiguity(c.ambiguity_m > 0 ? 1.0 / c.ambiguity_m : 0.0),
-        q(c.quantization_m),
-        inv_q(c.quantization_m > 0 ? 1.0 / c.quantization_m : 0.0) {}
-
-  // Round to nearest (ties to even) for 0 <= x < 2^51 with two additions: no libm call and no
-  // integer conversion on the critical path. (IEEE semantics: the project builds with
-  // -ffp-contract=off and never -ffast-math, which could fold this to x.)
-  static double roundNearest(double x) {
-    constexpr double kMagic = 0x1.8p52;
-    return (x + kMagic) - kMagic;
-  }
-
-  // Straight-line (every branch a select), so a loop of it vectorises; with ambiguity or q zero
-  // the reciprocals are zero and the corresponding steps leave m unchanged.
-  double operator()(double rho, double normal) const {
-    double m = rho + k * rho * rho * normal;
-    m = m > 0.0 ? m : 0.0;
-    double n = roundNearest(m * inv_ambiguity);
-    n = n * ambiguity > m ? n - 1.0 : n;  // floor(m / ambiguity)
-    m -= n * ambiguity;
-    m = ambiguity > 0.0 && m >= ambiguity ? m - ambiguity : m;
-    m = m < 0.0 ? m + ambiguity : m;
-    const double counts = q * roundNearest(m * inv_q);
-    m = q > 0.0 ? counts : m;
-    // The top count rounds onto the interval's end, which is range 0 again.
-    return ambiguity > 0.0 && m >= ambiguity ? 0.0 : m;
-  }
-};
-
-// Noise and measurement for the 16 pixels of a tile. rho is NaN where nothing returns.
-struct Tile16 {
-  const Measurement* measure;
-  const terrains::ZigguratTables* zig;
-  std::uint64_t stream;
-  bool noise;
-  const std::uint64_t* pixel;
-  const double* rho;
-  float* out;
-};
-
-// Three passes over the lanes, so the pixels' long dependency chains (hash, table lookup,
-// measurement) overlap instead of queueing behind one another.
-void noiseAndMeasure16(const Tile16& t) {
-  alignas(64) double normal[16];
-  bool slow[16];
-  for (int i = 0; i < 16; ++i) {
-    // SplitMix64's own stream: the pixel index picks the draw, independent of threads.
-    const std::uint64_t bits = terrains::mix64(t.stream + t.pixel[i] * 0x9E3779B97F4A7C15ull);
-    const std::uint64_t layer = bits & 127;
-    const double u = terrains::signedUnit52(bits);
-    slow[i] = t.noise && !(std::abs(u) < t.zig->ratio[layer]);
-    normal[i] = t.noise ? u * t.zig->x[layer] : 0.0;
-  }
-  for (int i = 0; i < 16; ++i)  // the ziggurat's rare edges and tail
-    if (slow[i]) normal[i] = terrains::normalFromKey(t.stream + t.pixel[i] * 0x9E3779B97F4A7C15ull);
-  for (int i = 0; i < 16; ++i)
-    t.out[i] = t.rho[i] == t.rho[i] ? float((*t.measure)(t.rho[i], normal[i])) : kNaN;
-}
-
-}  // namespace
-
 double measureRange(double rho, double normal, const ErimConfig& cfg) {
-  return Measurement(cfg)(rho, normal);
+  return kernel::Measurement(cfg.noise_k, cfg.ambiguity_m, cfg.quantization_m)(rho, normal);
 }
 
 ErimScanner::ErimScanner(const RayScene& scene, ErimConfig config)
@@ -172,6 +105,95 @@ Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const 
   return out;
 }
 
+namespace {
+
+// One 4×4 tile: its rays (one packet per footprint sample) and their hits.
+struct Tile {
+  int r0 = 0, c0 = 0;
+  bool full = false;  // all 16 pixels inside the image
+  alignas(64) int valid[16];
+  alignas(64) double cx[16], cy[16], cz[16];  // the central rays in double, for exact distances
+  std::array<RayHitPacket16, kFootprintSamples> hits;
+};
+
+// What every tile of one scan shares.
+struct ScanJob {
+  const RayScene& scene;
+  kernel::Isa isa;
+  int rows, cols, samples;
+  std::array<kernel::AngleTables, kFootprintSamples> angles;
+  double R[9];  // row-major
+  Eigen::Vector3d o;
+  const Footprint& fp;
+  double max_range, dropout;
+  kernel::MeasureTile measure;  // pixel0 set per tile
+  Scan& out;
+
+  void cast(Tile& t, int tr, int tc) const {
+    t.r0 = tr * 4, t.c0 = tc * 4;
+    t.full = t.r0 + 4 <= rows && t.c0 + 4 <= cols;
+    for (int i = 0; i < 16; ++i) t.valid[i] = t.full || (t.r0 + i / 4 < rows && t.c0 + i % 4 < cols) ? -1 : 0;
+    for (int k = 0; k < samples; ++k) {
+      RayHitPacket16& p = t.hits[k];
+      kernel::tileDirections(isa, angles[k], R, t.r0, t.c0, rows, cols, p.dx, p.dy, p.dz, k == 0 ? t.cx : nullptr,
+                             t.cy, t.cz);
+      for (int i = 0; i < 16; ++i) p.tfar[i] = kInf;
+      scene.intersect16(t.valid, p);
+    }
+  }
+
+  // Refinement, the reported range and the three outputs of a cast tile.
+  void finish(Tile& t, kernel::SlowDraws& slow) const {
+    RayHitPacket16& centre = t.hits[0];
+    scene.refine16(t.valid, o, t.cx, t.cy, t.cz, centre);
+    // The reported range: the power-weighted mean over the footprint (returned power of an
+    // extended target falls as 1/ρ²). Fewer than half the footprint returning: no return.
+    alignas(64) double rho[16];
+    alignas(64) float true_range[16];
+    alignas(64) int geom[16];
+    kernel::centreHits(isa, centre.tfar, centre.geom, max_range, true_range, geom, samples == 1 ? rho : nullptr);
+    if (samples > 1)
+      for (int i = 0; i < 16; ++i) {
+        double hit_w = 0, sum_w = 0, sum_wt = 0;
+        for (int k = 0; k < samples; ++k) {
+          if (!t.hits[k].hit(i)) continue;
+          const double d = t.hits[k].tfar[i];
+          hit_w += fp.w[k];
+          sum_w += fp.w[k] / (d * d);
+          sum_wt += fp.w[k] / d;
+        }
+        const double value = hit_w >= 0.5 ? sum_wt / sum_w : kInf;
+        rho[i] = value <= max_range ? value : kNaN;
+      }
+    kernel::MeasureTile m = measure;
+    m.pixel0 = std::uint64_t(t.r0) * cols + t.c0;
+    if (dropout > 0)
+      for (int i = 0; i < 16; ++i) {
+        const std::uint64_t key = kernel::noiseKey(m.stream, m.pixel0 + std::uint64_t(i / 4) * cols + i % 4);
+        if (terrains::toUnit(terrains::mix64(~key)) < dropout) rho[i] = kNaN;
+      }
+    unsigned lanes = 0;
+    for (int i = 0; i < 16; ++i) lanes |= unsigned(t.valid[i] & 1) << i;
+    alignas(64) float reported[16];
+    kernel::measureTile(isa, m, rho, lanes, reported, slow);
+    // Four consecutive pixels of each output per tile row, copied whole.
+    const auto copyRows = [&](int n) {
+      for (int a = 0; a < 4 && t.r0 + a < rows; ++a) {
+        std::memcpy(&out.true_range(t.r0 + a, t.c0), true_range + 4 * a, n * sizeof(float));
+        std::memcpy(&out.geom(t.r0 + a, t.c0), geom + 4 * a, n * sizeof(int));
+        std::memcpy(&out.image.range(t.r0 + a, t.c0), reported + 4 * a, n * sizeof(float));
+      }
+    };
+    if (t.full)
+      copyRows(4);  // a constant size: one 16-byte move each
+    else
+      copyRows(std::min(4, cols - t.c0));
+    if (slow.nearlyFull()) kernel::finishSlowDraws(m, slow, out.image.range.data());
+  }
+};
+
+}  // namespace
+
 void ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& out) const {
   const int rows = config_.rows, cols = config_.cols;
   // Every pixel of every output is written below, so reused buffers need no clearing.
@@ -191,81 +213,34 @@ void ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& 
   std::vector<AngleTable> tables;
   for (int k = 0; k < samples; ++k)
     tables.push_back(angleTable(out.image, radius * fp.dv[k], radius * fp.du[k]));
+  const kernel::Measurement measure(config_.noise_k, config_.ambiguity_m, config_.quantization_m);
+  ScanJob job{scene_, kernel::activeIsa(), rows, cols, samples, {}, {}, T_WS.translation(), fp,
+              config_.max_range_m, config_.dropout,
+              {&measure, &terrains::zigguratTables(), terrains::mix64(seed), config_.noise_k > 0, 0, std::uint64_t(cols)},
+              out};
+  for (int k = 0; k < samples; ++k)
+    job.angles[k] = {tables[k].sin_phi.data(), tables[k].cos_phi.data(), tables[k].sin_theta.data(),
+                     tables[k].cos_theta.data()};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) job.R[3 * i + j] = T_WS.linear()(i, j);
 
-  const Eigen::Matrix3d R = T_WS.linear();
-  const Eigen::Vector3d o = T_WS.translation();
-  const Measurement measure(config_);
-  const std::uint64_t stream = terrains::mix64(seed);
-  const terrains::ZigguratTables& zig = terrains::zigguratTables();
   const int tile_rows = (rows + 3) / 4, tile_cols = (cols + 3) / 4;
-
   tbb::parallel_for(tbb::blocked_range2d<int>(0, tile_rows, 0, tile_cols), [&](const auto& range) {
-    std::array<RayHitPacket16, kFootprintSamples> hits;
-    alignas(64) int valid[16];
-    alignas(64) double cx[16], cy[16], cz[16];  // the central rays in double, for exact distances
-    for (auto& p : hits)
+    Tile tile;
+    const Eigen::Vector3f of = job.o.cast<float>();
+    for (int k = 0; k < samples; ++k)
       for (int i = 0; i < 16; ++i) {
-        p.ox[i] = float(o.x());
-        p.oy[i] = float(o.y());
-        p.oz[i] = float(o.z());
+        RayHitPacket16& p = tile.hits[k];
+        p.ox[i] = of.x(), p.oy[i] = of.y(), p.oz[i] = of.z();
         p.tnear[i] = 0.0f;
       }
+    kernel::SlowDraws slow;
     for (int tr = range.rows().begin(); tr != range.rows().end(); ++tr)
       for (int tc = range.cols().begin(); tc != range.cols().end(); ++tc) {
-        for (int k = 0; k < samples; ++k) {
-          const AngleTable& a = tables[k];
-          RayHitPacket16& p = hits[k];
-          for (int i = 0; i < 16; ++i) {
-            const int r = std::min(tr * 4 + i / 4, rows - 1), c = std::min(tc * 4 + i % 4, cols - 1);
-            valid[i] = (tr * 4 + i / 4 < rows && tc * 4 + i % 4 < cols) ? -1 : 0;
-            const double ct = a.cos_theta[c];
-            const Eigen::Vector3d d =
-                R * Eigen::Vector3d(a.sin_theta[c], a.cos_phi[r] * ct, a.sin_phi[r] * ct);
-            p.dx[i] = float(d.x());
-            p.dy[i] = float(d.y());
-            p.dz[i] = float(d.z());
-            p.tfar[i] = kInf;
-            if (k == 0) cx[i] = d.x(), cy[i] = d.y(), cz[i] = d.z();
-          }
-          scene_.intersect16(valid, p);
-        }
-        // The rest runs lane by lane in passes, so the 16 pixels' long dependency chains
-        // (refinement, noise draw, measurement) overlap instead of queueing.
-        alignas(64) double rho[16];
-        scene_.refine16(valid, o, cx, cy, cz, hits[0]);
-        for (int i = 0; i < 16; ++i) {
-          // The reported range: the power-weighted mean over the footprint (returned power of an
-          // extended target falls as 1/ρ²). Fewer than half the footprint returning: no return.
-          double value = hits[0].hit(i) ? hits[0].tfar[i] : kInf;
-          if (samples > 1) {
-            double hit_w = 0, sum_w = 0, sum_wt = 0;
-            for (int k = 0; k < samples; ++k) {
-              if (!hits[k].hit(i)) continue;
-              const double t = hits[k].tfar[i];
-              hit_w += fp.w[k];
-              sum_w += fp.w[k] / (t * t);
-              sum_wt += fp.w[k] / t;
-            }
-            value = hit_w >= 0.5 ? sum_wt / sum_w : kInf;
-          }
-          rho[i] = value <= config_.max_range_m ? value : kNaN;
-        }
-        alignas(64) std::uint64_t pixel[16];
-        for (int i = 0; i < 16; ++i) pixel[i] = std::uint64_t(tr * 4 + i / 4) * cols + tc * 4 + i % 4;
-        if (config_.dropout > 0)
-          for (int i = 0; i < 16; ++i)
-            if (terrains::toUnit(terrains::mix64(~(stream + pixel[i] * 0x9E3779B97F4A7C15ull))) < config_.dropout)
-              rho[i] = kNaN;
-        alignas(64) float reported[16];
-        noiseAndMeasure16({&measure, &zig, stream, config_.noise_k > 0, pixel, rho, reported});
-        for (int i = 0; i < 16; ++i) {
-          if (!valid[i]) continue;
-          const int r = tr * 4 + i / 4, c = tc * 4 + i % 4;
-          out.true_range(r, c) = hits[0].hit(i) ? hits[0].tfar[i] : kNaN;
-          out.geom(r, c) = int(hits[0].geom[i]);
-          out.image.range(r, c) = reported[i];
-        }
+        job.cast(tile, tr, tc);
+        job.finish(tile, slow);
       }
+    kernel::finishSlowDraws(job.measure, slow, out.image.range.data());
   });
 }
 

@@ -43,6 +43,18 @@ struct MjcfWorld {
 };
 
 // A flat-sided plane heightfield z = z0 + a·x + b·y over [-half, half]², sampled every `cell`.
+// Fractal relief (0.8 m, 12 × 12 m at 10 cm) with Golombek–Rapp rocks (k = 0.15): the rough
+// scene that the scanner tests cast through, every geom kind of a generated world in one.
+inline terrains::TerrainSpec fractalWithRocks() {
+  terrains::TerrainSpec spec;
+  spec.kind = terrains::TerrainKind::Fractal;
+  spec.size_m = {12.0, 12.0};
+  spec.cell_m = 0.1;
+  spec.relief_m = 0.8;
+  spec.rocks = terrains::RockSpec{0.15, 0.15, 1.0};
+  return spec;
+}
+
 inline terrains::Terrain planeTerrain(double a, double b, double z0, double half = 10.0, double cell = 0.1) {
   const int n = int(std::lround(2 * half / cell)) + 1;
   terrains::Terrain t{terrains::Heightfield(n, n, cell, {-half, -half}), {}};

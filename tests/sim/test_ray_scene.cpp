@@ -71,13 +71,7 @@ TEST(GroundTruth, WatertightOnGridAlignedRays) {
 // Every ray of a 64×256 ERIM scan of a fractal terrain with rocks: Embree and mj_ray agree on
 // hit or miss, on the geom, and on the distance to 1e-5 m.
 TEST(RayScene, AgreesWithMjRayOnEveryRayOfAFractalScanWithRocks) {
-  terrains::TerrainSpec spec;
-  spec.kind = terrains::TerrainKind::Fractal;
-  spec.size_m = {12.0, 12.0};
-  spec.cell_m = 0.1;
-  spec.relief_m = 0.8;
-  spec.rocks = terrains::RockSpec{0.15, 0.15, 1.0};
-  const terrains::Terrain terrain = terrains::makeTerrain(spec, 7);
+  const terrains::Terrain terrain = terrains::makeTerrain(test::fractalWithRocks(), 7);
   ASSERT_GT(terrain.rocks.size(), 20u);
   const TerrainWorld w(terrain);
   ErimConfig c;
