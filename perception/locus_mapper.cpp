@@ -4,6 +4,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
 #include <algorithm>
 #include <cmath>
@@ -416,18 +417,24 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
 ElevationMap LocusMapper::map(const MapGrid& grid) const {
   ElevationMap out(grid);
   const Eigen::Vector3d v = Eigen::Vector3d::UnitZ();
-  tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& rows) {
-    for (int r = rows.begin(); r != rows.end(); ++r) {
-      int hint = -1;  // the previous cell's scanline: neighbours cross the image close together
-      for (int c = 0; c < grid.cols; ++c) {
-        const Eigen::Vector2d xy = grid.center(r, c);
-        const Eigen::Vector3d u(xy.x(), xy.y(), 0.0);
-        const LocusHit hit = intersect(u, v, &hint);
-        if (hit.state == CellState::Known) out.setKnown(r, c, float(hit.point.z()), float(hit.sigma));
-        else out.setUnknown(r, c, hit.state);
-      }
-    }
-  });
+  // One task per map row: rows cost very different amounts (unseen rows are cheap), and small
+  // tasks keep both cores busy to the end. Rows are independent (each starts without a hint), so
+  // the map is the same however it is split.
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, grid.rows, 1),
+      [&](const tbb::blocked_range<int>& rows) {
+        for (int r = rows.begin(); r != rows.end(); ++r) {
+          int hint = -1;  // the previous cell's scanline: neighbours cross the image close together
+          for (int c = 0; c < grid.cols; ++c) {
+            const Eigen::Vector2d xy = grid.center(r, c);
+            const Eigen::Vector3d u(xy.x(), xy.y(), 0.0);
+            const LocusHit hit = intersect(u, v, &hint);
+            if (hit.state == CellState::Known) out.setKnown(r, c, float(hit.point.z()), float(hit.sigma));
+            else out.setUnknown(r, c, hit.state);
+          }
+        }
+      },
+      tbb::simple_partitioner());
   return out;
 }
 
