@@ -231,14 +231,14 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
   }
   if (hint) *hint = std::min(r1, r2);
 
-  // Stage 2: search between the two scanlines until the bracket in φ is below ε. The bracket is
-  // [lo, hi] with Δ(lo) < 0 ≤ Δ(hi). Each step is a safeguarded estimate of the root: the chord
-  // (regula falsi) first, then inverse quadratic interpolation through the last three points
-  // (Δ(φ) is smooth within a pixel cell, so it lands within ~1e-7 rad), or halving whenever the
-  // previous step failed to halve the bracket. Once an estimate can be trusted (an interpolation
-  // through three points), Δ is evaluated ε/2 to either side of it — two independent
-  // evaluations — and the bracket usually closes below ε at once. `bisection: true` halves
-  // every step, as the paper does.
+  // Stage 2: search between the two scanlines until the bracket in φ is below ε (the paper's
+  // stopping rule). The bracket is [lo, hi] with Δ(lo) < 0 ≤ Δ(hi). The first estimate is the root
+  // of the Hermite cubic through Δ and dΔ/dφ at the two scanlines; after that, inverse quadratic
+  // interpolation through the bracket's ends and the end dropped last, or the chord, or halving
+  // whenever the last step did not halve the bracket. Around a trusted estimate (Hermite or
+  // quadratic), Δ is evaluated ε/2 to either side — two independent evaluations — and the
+  // bracket usually closes below ε at once. `bisection: true` halves every step, as the paper
+  // does. docs/locus.md.
   const double eps = config_.epsilon_rad;
   double phi_lo = image_.phi[r1], phi_hi = image_.phi[r2];
   Sample lo = s1, hi = s2;
@@ -289,9 +289,8 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
     if (it == 0 && !std::isnan(first)) {
       phi = first, trusted = true;
     } else if (!config_.bisection && !(width > 0.5 * width_before)) {
-      // Halve instead when the last two steps together did not halve the bracket (Brent's
-      // safeguard); otherwise inverse quadratic interpolation through the last three points,
-      // or the chord.
+      // Interpolate only while the steps halve the bracket (else the midpoint above, so that the
+      // search never does worse than bisection by more than a step in two).
       const double a = phi_lo, fa = lo.delta, b = phi_hi, fb = hi.delta;
       double est = a - fa * (b - a) / (fb - fa);
       if (have_x && d_x != fa && d_x != fb) {
