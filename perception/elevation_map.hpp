@@ -10,7 +10,8 @@
 namespace ambler::perception {
 
 enum class CellState : std::uint8_t {
-  Unseen = 0,  // no data: outside the field of view, beyond range, no return, or not asked for
+  Unseen = 0,  // no data: outside the field of view, beyond range, no return, not asked for, or
+               // in the undecidable part of the gap at an occluding edge (docs/locus.md)
   Known = 1,   // elevation and σ_z are set
   Shadow = 2,  // the cell's line meets the image at an occluding edge: hidden behind terrain
 };
