@@ -62,16 +62,18 @@ void sinCosNear(double sr, double cr, double delta, double& sp, double& cp) {
 
 }  // namespace
 
-Sample LocusMapper::evaluate(const Line& l, double rf, double sp, double cp) const {
+Sample LocusMapper::evaluate(const Line& l, double rf, double sp, double cp, double inv_den) const {
   Sample out;
-  // The point of the line on the plane of scan angle φ: z·cosφ − y·sinφ = 0.
-  const double den = l.b.z() * cp - l.b.y() * sp;
-  if (std::abs(den) < 1e-15) return out;
-  out.s = -(l.a.z() * cp - l.a.y() * sp) / den;
-  const Eigen::Vector3d p = l.a + out.s * l.b;
-  if (p.y() * cp + p.z() * sp <= 0) return out;  // behind the sensor
-  out.rho = p.norm();
-  out.cf = column_of_(p.x() / out.rho);
+  if (inv_den == 0.0) return out;  // the line is parallel to the scan plane
+  // The point of the line on the plane of scan angle φ, z·cosφ − y·sinφ = 0. There, (y, z) =
+  // λ·(cosφ, sinφ) with λ = y·cosφ + z·sinφ = ρ·cosθ, so ρ = √(x² + λ²) and tan θ = x/λ: the
+  // square root and the division do not wait for each other.
+  out.s = -(l.a.z() * cp - l.a.y() * sp) * inv_den;
+  const double x = l.a.x() + out.s * l.b.x();
+  const double lambda = (l.a.y() + out.s * l.b.y()) * cp + (l.a.z() + out.s * l.b.z()) * sp;
+  if (!(lambda > 0)) return out;  // behind the sensor
+  out.rho = std::sqrt(x * x + lambda * lambda);
+  out.cf = column_of_(x / lambda);
   const double cf = out.cf;
   if (!(cf >= 0.0 && cf <= last_col_) || !(rf >= 0.0 && rf <= last_row_)) return out;
   out.r0 = std::min(int(rf), rows_ - 2);
@@ -105,29 +107,80 @@ Sample LocusMapper::evaluate(const Line& l, double rf, double sp, double cp) con
   return out;
 }
 
-double LocusMapper::slope(const Line& l, int r, int r_cell, const Sample& m) const {
+double LocusMapper::slope(const Line& l, int r, const Sample& m, double dI_dfr, double dI_dfc) const {
   const double sp = sin_phi_[r], cp = cos_phi_[r];
-  const double den = l.b.z() * cp - l.b.y() * sp;
+  const double inv_den = l.inv_den ? l.inv_den[r] : 1.0 / (l.b.z() * cp - l.b.y() * sp);
   const double dnum = -l.a.z() * sp - l.a.y() * cp, dden = -l.b.z() * sp - l.b.y() * cp;
-  const double ds = -(dnum + m.s * dden) / den;  // s = −N/D, so s' = −(N' + s·D')/D
-  const Eigen::Vector3d p = l.a + m.s * l.b;
-  const double drho = p.dot(l.b) * ds / m.rho;
-  const double lateral = std::sqrt(p.y() * p.y() + p.z() * p.z());  // ρ·cos θ
-  const double dtheta = (l.b.x() * ds * m.rho - p.x() * drho) / (m.rho * lateral);
-  const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + m.c0;
-  const double fr = r - r_cell, fc = m.fc;
-  const double top = (1 - fc) * px[0] + fc * px[1], bottom = (1 - fc) * px[cols_] + fc * px[cols_ + 1];
-  const double dI_dfr = bottom - top, dI_dfc = (1 - fr) * (px[1] - px[0]) + fr * (px[cols_ + 1] - px[cols_]);
+  const double ds = -(dnum + m.s * dden) * inv_den;  // s = −N/D, so s' = −(N' + s·D')/D
+  const double px = l.a.x() + m.s * l.b.x(), py = l.a.y() + m.s * l.b.y(), pz = l.a.z() + m.s * l.b.z();
+  const double lateral = py * cp + pz * sp;  // ρ·cos θ, on the scan plane
+  const double inv = 1.0 / (m.rho * lateral);
+  const double drho = (px * l.b.x() + py * l.b.y() + pz * l.b.z()) * ds * lateral * inv;  // p·b·s'/ρ
+  const double dtheta = (l.b.x() * ds * m.rho - px * drho) * inv;
   // Rows run down as φ falls: dfr/dφ = −1/Δφ; dfc/dφ = θ'/Δθ.
   return drho - (dI_dfr * (-1.0 / dphi_) + dI_dfc * dtheta * inv_dtheta_);
 }
 
-Sample LocusMapper::atRow(const Line& l, int r) const { return evaluate(l, r, sin_phi_[r], cos_phi_[r]); }
+// evaluate() at a scanline, rf = r: the weights of the other row are 0, so only row r's two pixels
+// are read (the same value and the same edge bits as evaluate() gives there).
+Sample LocusMapper::atRow(const Line& l, int r) const {
+  Sample out;
+  const double sp = sin_phi_[r], cp = cos_phi_[r];
+  double inv_den;
+  if (l.inv_den) {
+    inv_den = l.inv_den[r];
+  } else {
+    const double den = l.b.z() * cp - l.b.y() * sp;
+    inv_den = std::abs(den) < 1e-15 ? 0.0 : 1.0 / den;
+  }
+  if (inv_den == 0.0) return out;
+  out.s = -(l.a.z() * cp - l.a.y() * sp) * inv_den;
+  const double x = l.a.x() + out.s * l.b.x();
+  const double lambda = (l.a.y() + out.s * l.b.y()) * cp + (l.a.z() + out.s * l.b.z()) * sp;
+  if (!(lambda > 0)) return out;
+  out.rho = std::sqrt(x * x + lambda * lambda);
+  const double cf = column_of_(x / lambda);
+  out.cf = cf;
+  if (!(cf >= 0.0 && cf <= last_col_)) return out;
+  const bool bottom = r == rows_ - 1;  // the last scanline: the bottom row of the cell above it
+  out.r0 = bottom ? r - 1 : r;
+  out.fr = bottom ? 1.0 : 0.0;
+  out.c0 = std::min(int(cf), cols_ - 2);
+  out.fc = cf - out.c0;
+  const float* px = image_.range.data() + std::size_t(r) * cols_ + out.c0;
+  const unsigned flags = cell_flags_[cellIndex(out.r0, out.c0)];
+  const unsigned used = (bottom ? 12u : 3u) & ((out.fc != 1.0 ? 5u : 0u) | (out.fc != 0.0 ? 10u : 0u));
+  const double q0 = px[0], q1 = px[1], gc = 1 - out.fc;
+  double I;
+  if (flags & kAllReturned) {
+    I = gc * q0 + out.fc * q1;
+  } else {  // a pixel with no weight is not used; one that returned nothing is never bridged
+    I = 0;
+    if (gc != 0.0) {
+      if (!std::isfinite(q0)) return out;
+      I += gc * q0;
+    }
+    if (out.fc != 0.0) {
+      if (!std::isfinite(q1)) return out;
+      I += out.fc * q1;
+    }
+  }
+  out.delta = out.rho - I;
+  out.edges = flags & used;
+  out.valid = true;
+  return out;
+}
 
 Sample LocusMapper::atPhi(const Line& l, int r_ref, double phi) const {
   double sp, cp;
   sinCosNear(sin_phi_[r_ref], cos_phi_[r_ref], image_.phi[r_ref] - phi, sp, cp);
-  return evaluate(l, (phi0_ - phi) / dphi_, sp, cp);
+  const double den = l.b.z() * cp - l.b.y() * sp;
+  return evaluate(l, (phi0_ - phi) / dphi_, sp, cp, std::abs(den) < 1e-15 ? 0.0 : 1.0 / den);
+}
+
+LocusMapper::Line LocusMapper::lineOf(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
+  const bool vertical = v.x() == 0.0 && v.y() == 0.0 && v.z() == 1.0;
+  return {T_SW_ * u, T_SW_.linear() * v, vertical ? vertical_inv_den_.data() : nullptr};
 }
 
 LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
@@ -136,7 +189,7 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
 
 LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v, int* hint) const {
   LocusHit hit;
-  const Line line{T_SW_ * u, T_SW_.linear() * v};
+  const Line line = lineOf(u, v);
   const int rows = rows_;
   auto at = [&](int r) {
     ++hit.evaluations;
@@ -315,22 +368,28 @@ double LocusMapper::hermiteEstimate(const Line& l, int r1, int r2, const Sample&
   const int r_cell = std::min(r1, r2);
   if (s1.c0 != s2.c0 || !(cell_flags_[cellIndex(r_cell, s1.c0)] & kAllReturned) || !(s1.delta < 0 && s2.delta > 0))
     return kNaN;
+  // The patch's partial derivatives at the two samples (fr = 0 on the top scanline, 1 on the bottom).
+  const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + s1.c0;
+  const double p00 = px[0], p01 = px[1], p10 = px[cols_], p11 = px[cols_ + 1];
+  const auto slopeAt = [&](int r, const Sample& m) {
+    const double fr = r - r_cell, fc = m.fc;
+    const double top = (1 - fc) * p00 + fc * p01, bottom = (1 - fc) * p10 + fc * p11;
+    return slope(l, r, m, bottom - top, (1 - fr) * (p01 - p00) + fr * (p11 - p10));
+  };
   const double phi1 = image_.phi[r1], h = image_.phi[r2] - phi1;
   const double y0 = s1.delta, y1 = s2.delta;
-  const double m0 = slope(l, r1, r_cell, s1) * h, m1 = slope(l, r2, r_cell, s2) * h;
+  const double m0 = slopeAt(r1, s1) * h, m1 = slopeAt(r2, s2) * h;
   const double c2 = -3 * y0 - 2 * m0 + 3 * y1 - m1, c3 = 2 * y0 + m0 - 2 * y1 + m1;
-  // Newton on the cubic from the chord, kept inside the part of [0, 1] where it changes sign.
-  // Newton converges quadratically: once a step is below 1e-6 (of the scanline spacing) the next
-  // would be ~1e-12.
+  // Two Newton steps on the cubic from the chord, each kept inside the part of [0, 1] where it
+  // changes sign. The chord errs by ~1e-2 of the scanline spacing; Newton converges
+  // quadratically, so two steps leave ~1e-8 of it (~1e-10 rad), far inside the probe pair's ε/2.
+  // Where they do not (the probe pair then fails to straddle the root), the search goes on.
   double t = y0 / (y0 - y1), t_neg = 0, t_pos = 1;
-  for (int k = 0; k < 10; ++k) {
+  for (int k = 0; k < 2; ++k) {
     const double H = y0 + t * (m0 + t * (c2 + t * c3)), dH = m0 + t * (2 * c2 + 3 * t * c3);
     (H < 0 ? t_neg : t_pos) = t;
-    double next = dH != 0.0 ? t - H / dH : 0.5 * (t_neg + t_pos);
-    if (!((next - t_neg) * (next - t_pos) < 0)) next = 0.5 * (t_neg + t_pos);
-    const bool converged = std::abs(next - t) < 1e-6;
-    t = next;
-    if (converged) break;
+    const double next = t - H / dH;
+    t = (next - t_neg) * (next - t_pos) < 0 ? next : 0.5 * (t_neg + t_pos);
   }
   return phi1 + t * h;
 }
@@ -370,16 +429,6 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
                          : phi_lo - lo.delta * (phi_hi - phi_lo) / (hi.delta - lo.delta);
   const double t = phi_hi == phi_lo ? 0.0 : (phi - phi_lo) / (phi_hi - phi_lo);
   const Sample& near = t <= 0.5 ? lo : hi;
-  // Where the point is in the image: in the 2×2 cell between the bracket's two scanlines.
-  const int r_cell = std::min(r1, r2);
-  Sample where = near;
-  where.rho = lo.rho + t * (hi.rho - lo.rho);
-  where.cf = lo.cf + t * (hi.cf - lo.cf);
-  where.r0 = r_cell;
-  where.fr = std::clamp((phi0_ - phi) / dphi_ - r_cell, 0.0, 1.0);
-  where.c0 = std::clamp(int(where.cf), 0, cols_ - 2);
-  where.fc = std::clamp(where.cf - where.c0, 0.0, 1.0);
-
   // The crossing is at an occluding edge when edge pixels lie on both sides of it — on both
   // scanlines of the bracket, or in both columns of the final cell. Edge pixels come in pairs
   // across a discontinuity, so a visible point beside one (on a ledge's lip) has edge pixels on
@@ -408,9 +457,13 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   hit.s = lo.s + t * (hi.s - lo.s);
   hit.point = u + hit.s * v;
   hit.phi = phi;
-  hit.theta = theta0_ + dtheta_ * where.cf;
-  hit.rho = where.rho;
-  hit.sigma = sigmaAlongLine(where, line.a + hit.s * line.b, line.b);
+  // Where the point is in the image: in the 2×2 cell between the bracket's two scanlines.
+  const double cf = lo.cf + t * (hi.cf - lo.cf);
+  const int r_cell = std::min(r1, r2), c_cell = std::clamp(int(cf), 0, cols_ - 2);
+  hit.theta = theta0_ + dtheta_ * cf;
+  hit.rho = lo.rho + t * (hi.rho - lo.rho);
+  hit.sigma = sigmaAlongLine(r_cell, c_cell, std::clamp((phi0_ - phi) / dphi_ - r_cell, 0.0, 1.0),
+                             std::clamp(cf - c_cell, 0.0, 1.0), hit.rho, line.a + hit.s * line.b, line.b);
 }
 
 ElevationMap LocusMapper::map(const MapGrid& grid) const {

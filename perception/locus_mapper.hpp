@@ -65,6 +65,10 @@ class LocusMapper {
  private:
   struct Line {
     Eigen::Vector3d a, b;  // the line a + s·b in the sensor frame
+    // Per scanline r: 1/(b_z·cosφ_r − b_y·sinφ_r), the reciprocal of the denominator of the line's
+    // crossing with the scan plane (0 where the line is parallel to it). Set for the vertical
+    // direction, which every map shares (tabulated once per image); null for other directions.
+    const double* inv_den = nullptr;
   };
   // Per 2×2 pixel cell (r0, c0): the inputs of σ (docs/locus.md) — the local normal in the sensor
   // frame and the mean squared second difference of the ranges across scanlines and along them
@@ -77,33 +81,39 @@ class LocusMapper {
   // The same, starting the scanline search at *hint (a neighbouring line's crossing) and
   // updating it; hint may be null.
   LocusHit intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v, int* hint) const;
-  // Δ = ρ_line − I at fractional row rf, whose scan angle has sine sp and cosine cp.
-  LocusSample evaluate(const Line& l, double rf, double sp, double cp) const;
-  // dΔ/dφ at a sample taken on scanline r, with I bilinear on the 2×2 cell whose top row is r_cell.
-  double slope(const Line& l, int r, int r_cell, const LocusSample& m) const;
-  // (asin(x) − offset)·scale, tabulated (see the constructor): the column coordinate
-  // (θ − θ0)/Δθ of a direction with sin θ = x, and the row coordinate (φ0 − φ)/Δφ of one with
-  // sin φ = x in its scan plane.
-  struct AsinTable {
+  // Δ = ρ_line − I at fractional row rf, whose scan angle has sine sp and cosine cp; inv_den is
+  // 1/(b_z·cp − b_y·sp) (0: the line is parallel to that scan plane).
+  LocusSample evaluate(const Line& l, double rf, double sp, double cp, double inv_den) const;
+  // dΔ/dφ at a sample m taken on scanline r, where the image's bilinear patch has the partial
+  // derivatives dI_dfr (across scanlines) and dI_dfc (along them).
+  double slope(const Line& l, int r, const LocusSample& m, double dI_dfr, double dI_dfc) const;
+  // (f(x) − offset)·scale for f = asin or atan, tabulated (see the constructor): with f = atan and
+  // x = tan θ, the column coordinate (θ − θ0)/Δθ; with f = asin and x = sin φ in the scan plane,
+  // the row coordinate (φ0 − φ)/Δφ. Quadratic Taylor polynomials about the middles of kSize
+  // intervals over |x| ≤ limit; beyond that, libm.
+  struct AngleTable {
     struct Poly {
       double x, c0, c1, c2;  // ≈ c0 + c1·(x' − x) + c2·(x' − x)² near x
     };
-    double offset = 0, scale = 1;
+    bool is_atan = false;
+    double offset = 0, scale = 1, limit = 0, index_scale = 0;
     std::vector<Poly> polys;
-    AsinTable() = default;
-    AsinTable(double offset, double scale);
+    AngleTable() = default;
+    AngleTable(bool atan, double limit, double offset, double scale);
     double operator()(double x) const {
-      if (!(std::abs(x) <= kMax)) return (std::asin(std::clamp(x, -1.0, 1.0)) - offset) * scale;
-      const Poly& e = polys[std::size_t((x + 1.0) * (kSize / 2))];
+      if (!(std::abs(x) <= limit))
+        return ((is_atan ? std::atan(x) : std::asin(std::clamp(x, -1.0, 1.0))) - offset) * scale;
+      const Poly& e = polys[std::size_t((x + limit) * index_scale)];
       const double d = x - e.x;
       return e.c0 + d * (e.c1 + d * e.c2);
     }
-    static constexpr int kSize = 2048;     // intervals of x over [−1, 1]
-    static constexpr double kMax = 0.95;   // beyond |x| = 0.95 (72°), std::asin
+    static constexpr int kSize = 4096;
   };
+  Line lineOf(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const;  // u + s·v in the sensor frame
   LocusSample atRow(const Line& l, int r) const;
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;
-  double sigmaAlongLine(const LocusSample& at, const Eigen::Vector3d& p, const Eigen::Vector3d& b) const;
+  double sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
+                        const Eigen::Vector3d& b) const;
   // The first estimate of the root between scanlines r1 (sample s1, Δ < 0) and r2 = r1 ± 1 (s2,
   // Δ > 0): the root of their Hermite cubic, or NaN where that does not apply.
   double hermiteEstimate(const Line& l, int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
@@ -126,9 +136,12 @@ class LocusMapper {
   std::vector<double> roughness_g_;  // the fBm interpolation factor, tabulated over f
   double phi0_, dphi_, theta0_, dtheta_;
   double inv_dtheta_;
+  double quantization_var_;  // q²/12
   double last_row_, last_col_;  // rows − 1 and cols − 1: the largest fractional row and column
   std::vector<double> sin_phi_, cos_phi_, sin_theta_, cos_theta_;
-  AsinTable column_of_, row_of_;
+  AngleTable column_of_;  // over tan θ
+  AngleTable row_of_;     // over sin φ
+  std::vector<double> vertical_inv_den_;  // Line::inv_den of the vertical direction (world z)
   std::vector<std::uint8_t> cell_flags_;  // per 2×2 cell: bits 0–3 edge pixels, bit 4 all returned
   std::vector<CellSigma> cell_sigma_;
   Eigen::AlignedBox3d bounds_;  // world bounds of the returns, ± margin

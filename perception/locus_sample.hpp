@@ -10,16 +10,19 @@ namespace ambler::perception {
 struct LocusSample {
   bool valid = false;   // the line is in front of the sensor, inside the image, all pixels returned
   unsigned edges = 0;   // bit k: pixel k (of the 2×2 cell, weighted) is an occluding-edge pixel
-  int r0 = 0, c0 = 0;   // the top-left pixel of the 2×2 cell
-  double delta = 0, s = 0, rho = 0;
-  double cf = 0;          // the column coordinate (θ − θ0)/Δθ
-  double fr = 0, fc = 0;  // the position inside the cell: bilinear weights (1−fr)(1−fc), (1−fr)fc, …
+  int r0, c0;           // the top-left pixel of the 2×2 cell
+  double delta, s, rho;
+  double cf;            // the column coordinate (θ − θ0)/Δθ
+  double fr, fc;        // the position inside the cell: bilinear weights (1−fr)(1−fc), (1−fr)fc, …
+  // (The numbers are set wherever `valid` is; left uninitialised, as they are written in the hot
+  // loop of every search.)
 };
 
 namespace locus {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::uint8_t kAllReturned = 16;
+constexpr int kRoughnessSteps = 1024;  // intervals of the tabulated fBm interpolation factor
 
 }  // namespace locus
 

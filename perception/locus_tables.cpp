@@ -100,15 +100,16 @@ double meanSecondDifference2(const PixelTables& px, int r0, int c0, bool across_
 }
 
 // The variance of linear interpolation between samples of a rough surface, as a range error at
-// fraction f. The surface between pixels is modelled as fractional Brownian motion with Hurst
-// exponent H: for samples h apart, Var[interpolation error] = σ²h^2H·g(f), with
+// fraction f ∈ [0, 1]. The surface between pixels is modelled as fractional Brownian motion with
+// Hurst exponent H: for samples h apart, Var[interpolation error] = σ²h^2H·g(f), with
 // g(f) = f^2H(1−f) + (1−f)^2H·f − f(1−f), and the second difference has
-// E[D²] = σ²h^2H·(4 − 2^2H) plus the noise's 6σ_p² (docs/locus.md).
-double roughnessVariance(double mean_d2, double f, double var_pixel, const std::vector<double>& g_table) {
+// E[D²] = σ²h^2H·(4 − 2^2H) plus the noise's 6σ_p² (docs/locus.md). g_table holds
+// g/(4 − 2^2H) at kRoughnessSteps + 1 points.
+inline double roughnessVariance(double mean_d2, double f, double var_pixel, const double* g_table) {
   if (std::isnan(mean_d2)) return 0.0;
-  const double x = std::clamp(f, 0.0, 1.0) * double(g_table.size() - 1);
-  const std::size_t i = std::min(std::size_t(x), g_table.size() - 2);
-  const double g = g_table[i] + (x - double(i)) * (g_table[i + 1] - g_table[i]);
+  const double x = f * kRoughnessSteps;
+  const int i = std::min(int(x), kRoughnessSteps - 1);
+  const double g = g_table[i] + (x - i) * (g_table[i + 1] - g_table[i]);
   return g * std::max(0.0, mean_d2 - 6.0 * var_pixel);
 }
 
@@ -128,10 +129,10 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   if (!(dphi_ > 0) || !(dtheta_ > 0) || !checkEven(image.phi, -dphi_) || !checkEven(image.theta, dtheta_))
     throw std::invalid_argument("LocusMapper: scan angles must be evenly spaced, φ falling, θ rising");
   up_ = T_SW_.linear() * Eigen::Vector3d::UnitZ();
-  // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1], 1024 steps; g is smooth).
+  // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1]; g is smooth).
   const double h2 = 2 * config.roughness_hurst;
-  for (int i = 0; i <= 1024; ++i) {
-    const double f = i / 1024.0;
+  for (int i = 0; i <= kRoughnessSteps; ++i) {
+    const double f = double(i) / kRoughnessSteps;
     roughness_g_.push_back((std::pow(f, h2) * (1 - f) + std::pow(1 - f, h2) * f - f * (1 - f)) /
                            (4 - std::pow(2.0, h2)));
   }
@@ -144,10 +145,16 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
     cos_theta_.push_back(std::cos(theta));
   }
   inv_dtheta_ = 1.0 / dtheta_;
+  quantization_var_ = config.quantization_m * config.quantization_m / 12.0;
   last_row_ = rows_ - 1;
   last_col_ = cols_ - 1;
-  column_of_ = AsinTable(theta0_, inv_dtheta_);
-  row_of_ = AsinTable(phi0_, -1.0 / dphi_);
+  column_of_ = AngleTable(true, 3.0, theta0_, inv_dtheta_);  // |θ| ≤ 71.6°
+  row_of_ = AngleTable(false, 0.95, phi0_, -1.0 / dphi_);     // |φ| ≤ 71.8°
+  // The vertical direction's crossing denominators, shared by every map of this image.
+  for (int r = 0; r < rows_; ++r) {
+    const double den = up_.z() * cos_phi_[r] - up_.y() * sin_phi_[r];
+    vertical_inv_den_.push_back(std::abs(den) < 1e-15 ? 0.0 : 1.0 / den);
+  }
   const PixelTables pixels(image, sin_phi_, cos_phi_, sin_theta_, cos_theta_);
   for (std::size_t i = 0; i < pixels.point.size(); ++i)
     if (pixels.returned[i]) bounds_.extend(image.T_WS * pixels.point[i]);
@@ -176,32 +183,45 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   });
 }
 
-// asin as a quadratic Taylor polynomial about the middle of each of 2048 intervals of x: the
-// cubic term, (1 + 2x²)/(1 − x²)^(5/2)·d³/6 with |d| ≤ 1/2048, is below 2e-10 rad for
-// |x| ≤ sin 45° and 2e-8 rad at the table's end (asinf errs by 6e-8).
-LocusMapper::AsinTable::AsinTable(double offset_, double scale_) : offset(offset_), scale(scale_) {
-  for (int k = 0; k < AsinTable::kSize; ++k) {
-    const double x = -1.0 + (k + 0.5) * (2.0 / AsinTable::kSize), q = 1.0 - x * x;
-    polys.push_back({x, (std::asin(x) - offset) * scale, scale / std::sqrt(q), scale * x / (2.0 * q * std::sqrt(q))});
+// f = asin or atan as a quadratic Taylor polynomial about the middle of each of 4096 intervals of
+// x over [−limit, limit]. The cubic term f‴·d³/6, |d| ≤ limit/4096, is the error: for atan
+// (|f‴| ≤ 2, limit 3) below 1.3e-10 rad; for asin (f‴ = (1 + 2x²)/(1 − x²)^(5/2), limit 0.95)
+// below 3e-11 rad for |x| ≤ sin 45° and 2e-9 rad at the table's end (asinf errs by 6e-8).
+LocusMapper::AngleTable::AngleTable(bool atan, double limit_, double offset_, double scale_)
+    : is_atan(atan), offset(offset_), scale(scale_), limit(limit_), index_scale(kSize / (2 * limit_)) {
+  for (int k = 0; k < kSize; ++k) {
+    const double x = -limit + (k + 0.5) * (2 * limit / kSize);
+    double f, d1, d2;  // f, f′ and f″/2 at x
+    if (atan) {
+      const double q = 1.0 + x * x;
+      f = std::atan(x), d1 = 1.0 / q, d2 = -x / (q * q);
+    } else {
+      const double q = 1.0 - x * x;
+      f = std::asin(x), d1 = 1.0 / std::sqrt(q), d2 = x / (2.0 * q * std::sqrt(q));
+    }
+    polys.push_back({x, (f - offset) * scale, d1 * scale, d2 * scale});
   }
+  polys.push_back(polys.back());  // x = limit exactly indexes one past the last interval
 }
 
 
 // σ of the position along the line (docs/locus.md): the range error of the interpolated image —
 // the pixels' noise, σ_p² = (kρ²)² + q²/12, weighted by Σw², plus the surface's roughness between
-// pixels that interpolation cannot know — carried along the beam d onto the local surface
-// (normal n) and from there onto the line b: σ_s = σ_I·|d·n| / |b·n|.
-double LocusMapper::sigmaAlongLine(const Sample& at, const Eigen::Vector3d& p, const Eigen::Vector3d& b) const {
-  const double w[4] = {(1 - at.fr) * (1 - at.fc), (1 - at.fr) * at.fc, at.fr * (1 - at.fc), at.fr * at.fc};
-  const double sum_w2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + w[3] * w[3];
-  const double noise = config_.noise_k * at.rho * at.rho;
-  const double var_pixel = noise * noise + config_.quantization_m * config_.quantization_m / 12.0;
-  const CellSigma& cs = cell_sigma_[cellIndex(at.r0, at.c0)];
-  const double rough = roughnessVariance(cs.d2_rows, at.fr, var_pixel, roughness_g_) +
-                       roughnessVariance(cs.d2_cols, at.fc, var_pixel, roughness_g_);
+// pixels that interpolation cannot know — carried along the beam d = p/ρ onto the local surface
+// (normal n) and from there onto the line b: σ_s = σ_I·|d·n| / |b·n|. The point p (sensor frame)
+// is at range rho, in the 2×2 cell (r0, c0) at fractions fr, fc ∈ [0, 1].
+double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
+                                   const Eigen::Vector3d& b) const {
+  // Σw² of the bilinear weights factorises: ((1−fr)² + fr²)·((1−fc)² + fc²).
+  const double gr = 1 - fr, gc = 1 - fc;
+  const double sum_w2 = (gr * gr + fr * fr) * (gc * gc + fc * fc);
+  const double noise = config_.noise_k * rho * rho;
+  const double var_pixel = noise * noise + quantization_var_;
+  const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
+  const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
+                       roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data());
   const double var_rho = var_pixel * sum_w2 + rough;
-  const Eigen::Vector3d d = p / at.rho;
-  return std::sqrt(var_rho) * std::abs(d.dot(cs.normal)) / std::max(std::abs(b.dot(cs.normal)), 0.05);
+  return std::sqrt(var_rho) * std::abs(p.dot(cs.normal) / rho) / std::max(std::abs(b.dot(cs.normal)), 0.05);
 }
 
 }  // namespace ambler::perception
