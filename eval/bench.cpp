@@ -208,20 +208,26 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   const perception::EdgeMask edges = perception::detectRangeEdges(image);
   const double edges_ms = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_edges).count() * 1e3;
 
-  nlohmann::ordered_json j, one, all, speedup, cart;
-  std::printf("ambler bench map (medians of %d; region x [-5, 5] m, y [-3, 8] m; 64x256 scan)\n", opt.repetitions);
-  std::printf("  %-8s %10s %14s %14s %10s %16s\n", "cell", "cells", "locus 1t ns", "locus all ns", "speedup",
-              "cartesian 1t ns");
+  nlohmann::ordered_json j, one, all, speedup, cart, scalar_one, lanes;
+  std::printf("ambler bench map (medians of %d; region x [-5, 5] m, y [-3, 8] m; 64x256 scan; AVX-512 lanes %s)\n",
+              opt.repetitions, perception::LocusMapper::lanesAvailable() ? "on" : "not available");
+  std::printf("  %-8s %10s %14s %14s %10s %16s %16s %8s\n", "cell", "cells", "locus 1t ns", "locus all ns", "speedup",
+              "cartesian 1t ns", "scalar 1t ns", "lanes");
   for (double cell : {0.02, 0.05, 0.10, 0.20}) {
     MapSpec spec;
     spec.cell_m = cell;
     const perception::MapGrid grid = mapGrid(spec);
     const perception::LocusMapper mapper(image, &edges, locusConfig(spec, sensor));
+    perception::LocusConfig scalar_config = locusConfig(spec, sensor);
+    scalar_config.vectorized = false;
+    const perception::LocusMapper scalar(image, &edges, scalar_config);
     const double cells = double(grid.cells());
-    double t1 = 0, tc = 0;
+    double t1 = 0, tc = 0, ts = 0;
+    long lane_cells = 0;
     {
       tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-      t1 = timeMedian(opt.repetitions, [&] { mapper.map(grid); });
+      t1 = timeMedian(opt.repetitions, [&] { mapper.map(grid, &lane_cells); });
+      ts = timeMedian(opt.repetitions, [&] { scalar.map(grid); });
       tc = timeMedian(opt.repetitions, [&] { buildCartesianMap(image, spec, perception::GapFill::Linear); });
     }
     const double ta = timeMedian(opt.repetitions, [&] { mapper.map(grid); });
@@ -231,8 +237,10 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
     all[key] = ta / cells * 1e9;
     speedup[key] = t1 / ta;
     cart[key] = tc / cells * 1e9;
-    std::printf("  %-8.2f %10.0f %14.1f %14.1f %9.2fx %16.1f\n", cell, cells, t1 / cells * 1e9, ta / cells * 1e9,
-                t1 / ta, tc / cells * 1e9);
+    scalar_one[key] = ts / cells * 1e9;
+    lanes[key] = double(lane_cells) / cells;
+    std::printf("  %-8.2f %10.0f %14.1f %14.1f %9.2fx %16.1f %16.1f %7.0f%%\n", cell, cells, t1 / cells * 1e9,
+                ta / cells * 1e9, t1 / ta, tc / cells * 1e9, ts / cells * 1e9, 100.0 * lane_cells / cells);
   }
   // Per image: the mapper's tables (returns, edge pixels and σ inputs per 2×2 cell), one thread.
   double setup_s = 0;
@@ -246,6 +254,8 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   j["ns_per_cell_all"] = all;
   j["speedup_all"] = speedup;
   j["cartesian_ns_per_cell_1t"] = cart;
+  j["scalar_ns_per_cell_1t"] = scalar_one;  // the same maps without the AVX-512 lanes
+  j["lane_fraction"] = lanes;               // of all cells, those the lanes completed
   j["edges_ms"] = edges_ms;
   j["locus_setup_ms"] = setup_s * 1e3;
   j["threads"] = tbb::info::default_concurrency();

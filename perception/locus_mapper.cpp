@@ -7,6 +7,7 @@
 #include <tbb/partitioner.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 
@@ -180,7 +181,14 @@ Sample LocusMapper::atPhi(const Line& l, int r_ref, double phi) const {
 
 LocusMapper::Line LocusMapper::lineOf(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
   const bool vertical = v.x() == 0.0 && v.y() == 0.0 && v.z() == 1.0;
-  return {T_SW_ * u, T_SW_.linear() * v, vertical ? vertical_inv_den_.data() : nullptr};
+  const Eigen::Matrix3d& R = rot_SW_;
+  Line l;
+  for (int i = 0; i < 3; ++i) {
+    l.a[i] = ((R(i, 0) * u.x() + R(i, 1) * u.y()) + R(i, 2) * u.z()) + trans_SW_[i];
+    l.b[i] = (R(i, 0) * v.x() + R(i, 1) * v.y()) + R(i, 2) * v.z();
+  }
+  l.inv_den = vertical ? vertical_inv_den_.data() : nullptr;
+  return l;
 }
 
 LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
@@ -282,7 +290,8 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
     }
     if (r1 < 0) return hit;
   }
-  if (hint) *hint = std::min(r1, r2);
+  hit.bracket_row = std::min(r1, r2);
+  if (hint) *hint = hit.bracket_row;
 
   // Stage 2: search between the two scanlines until the bracket in φ is below ε (the paper's
   // stopping rule). The bracket is [lo, hi] with Δ(lo) < 0 ≤ Δ(hi). The first estimate is the root
@@ -466,27 +475,44 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
                              std::clamp(cf - c_cell, 0.0, 1.0), hit.rho, line.a + hit.s * line.b, line.b);
 }
 
-ElevationMap LocusMapper::map(const MapGrid& grid) const {
+ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
   ElevationMap out(grid);
+  std::atomic<long> by_lanes{0};
   const Eigen::Vector3d v = Eigen::Vector3d::UnitZ();
+  const bool lanes = config_.vectorized && lanesAvailable();
   // One task per map row: rows cost very different amounts (unseen rows are cheap), and small
   // tasks keep both cores busy to the end. Rows are independent (each starts without a hint), so
-  // the map is the same however it is split.
+  // the map is the same however it is split. Within a row, cells go in groups of kLanes: every
+  // cell of a group starts its scanline search from the same hint — the last bracket found in the
+  // groups before it — so the lanes and the scalar search give the same map.
   tbb::parallel_for(
       tbb::blocked_range<int>(0, grid.rows, 1),
       [&](const tbb::blocked_range<int>& rows) {
+        CellResult res[kLanes];
         for (int r = rows.begin(); r != rows.end(); ++r) {
-          int hint = -1;  // the previous cell's scanline: neighbours cross the image close together
-          for (int c = 0; c < grid.cols; ++c) {
-            const Eigen::Vector2d xy = grid.center(r, c);
-            const Eigen::Vector3d u(xy.x(), xy.y(), 0.0);
-            const LocusHit hit = intersect(u, v, &hint);
-            if (hit.state == CellState::Known) out.setKnown(r, c, float(hit.point.z()), float(hit.sigma));
-            else out.setUnknown(r, c, hit.state);
+          int hint = -1;
+          for (int c0 = 0; c0 < grid.cols; c0 += kLanes) {
+            const int n = std::min(kLanes, grid.cols - c0);
+            const unsigned done = lanes && hint >= 0 && n == kLanes ? mapLanes(grid, r, c0, hint, res) : 0u;
+            if (done) by_lanes += __builtin_popcount(done);
+            int next = hint;
+            for (int k = 0; k < n; ++k) {
+              if (!(done >> k & 1u)) {
+                const Eigen::Vector2d xy = grid.center(r, c0 + k);
+                int h = hint;
+                const LocusHit hit = intersect(Eigen::Vector3d(xy.x(), xy.y(), 0.0), v, &h);
+                res[k] = {hit.state, float(hit.point.z()), float(hit.sigma), hit.bracket_row};
+              }
+              if (res[k].state == CellState::Known) out.setKnown(r, c0 + k, res[k].z, res[k].sigma);
+              else out.setUnknown(r, c0 + k, res[k].state);
+              if (res[k].bracket_row >= 0) next = res[k].bracket_row;
+            }
+            hint = next;
           }
         }
       },
       tbb::simple_partitioner());
+  if (lane_cells) *lane_cells = by_lanes;
   return out;
 }
 

@@ -25,6 +25,8 @@ struct LocusConfig {
   double z_margin_m = 1.0;    // lines are searched within the returns' bounds ± this margin
   bool roughness = true;      // σ includes the surface's roughness between pixels (docs/locus.md)
   double roughness_hurst = 0.7;  // H of the fBm assumed between pixels (0.5: Brownian)
+  bool vectorized = true;  // maps: the common case 8 cells at a time in AVX-512 where the CPU has
+                           // it (the same bits as the scalar search; false: scalar only)
 };
 
 struct LocusHit {
@@ -34,6 +36,7 @@ struct LocusHit {
   double sigma = std::numeric_limits<double>::quiet_NaN();  // σ of s (σ_z for vertical lines)
   double phi = 0, theta = 0, rho = 0;                       // where the line met the image
   int evaluations = 0;                                      // Δ evaluations spent
+  int bracket_row = -1;  // the upper scanline of the two that bracket the crossing; −1: none found
 };
 
 struct LocusSample;
@@ -55,8 +58,15 @@ class LocusMapper {
     return intersect({x, y, 0.0}, Eigen::Vector3d::UnitZ());
   }
 
-  // A map on `grid`: vertical lines through the cell centres, in parallel over rows.
-  ElevationMap map(const MapGrid& grid) const;
+  // A map on `grid`: vertical lines through the cell centres, in parallel over rows. Each group of
+  // kLanes cells of a map row starts its scanline search at the last bracket found in the groups
+  // before it (docs/locus.md); the map does not depend on the ISA or the number of threads.
+  // lane_cells, if given, receives how many cells the AVX-512 lanes completed.
+  ElevationMap map(const MapGrid& grid, long* lane_cells = nullptr) const;
+
+  static constexpr int kLanes = 8;  // map cells per group (and per AVX-512 batch)
+  // Whether this process runs the AVX-512 lanes (the CPU and OS support AVX-512F/DQ).
+  static bool lanesAvailable();
 
   // The map at resolution `cell_m` inside a polygon (x, y vertices, world frame): the grid covers
   // the polygon's bounding box; cells whose centre is outside the polygon stay Unseen.
@@ -109,7 +119,21 @@ class LocusMapper {
     }
     static constexpr int kSize = 4096;
   };
-  Line lineOf(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const;  // u + s·v in the sensor frame
+  // u + s·v in the sensor frame: a = R·u + t with R = T_SW's rotation, each component summed
+  // left to right (the lanes repeat these operations exactly).
+  Line lineOf(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const;
+  // One map cell's result as map() stores it.
+  struct CellResult {
+    CellState state;
+    float z, sigma;
+    int bracket_row;
+  };
+  // The cells (row, c0 + k), k < kLanes, of `grid` whose search from `hint` takes the common path
+  // (a bracket within a few scanlines of the hint, the Hermite estimate, a probe pair that
+  // closes it, no edge or missing pixel in the final 2×2 cell), in AVX-512 with the scalar
+  // search's operations: bit k of the result is set where lane k finished into out[k]
+  // (locus_lanes.cpp).
+  unsigned mapLanes(const MapGrid& grid, int row, int c0, int hint, CellResult* out) const;
   LocusSample atRow(const Line& l, int r) const;
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;
   double sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
@@ -131,6 +155,8 @@ class LocusMapper {
   const EdgeMask* edges_;
   LocusConfig config_;
   Eigen::Isometry3d T_SW_;
+  Eigen::Matrix3d rot_SW_;
+  Eigen::Vector3d trans_SW_;
   Eigen::Vector3d up_;  // world z in the sensor frame
   int rows_, cols_;
   std::vector<double> roughness_g_;  // the fBm interpolation factor, tabulated over f

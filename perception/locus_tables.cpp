@@ -128,7 +128,9 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   dtheta_ = image.theta[1] - image.theta[0];
   if (!(dphi_ > 0) || !(dtheta_ > 0) || !checkEven(image.phi, -dphi_) || !checkEven(image.theta, dtheta_))
     throw std::invalid_argument("LocusMapper: scan angles must be evenly spaced, φ falling, θ rising");
-  up_ = T_SW_.linear() * Eigen::Vector3d::UnitZ();
+  rot_SW_ = T_SW_.linear();
+  trans_SW_ = T_SW_.translation();
+  up_ = lineOf(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()).b;  // world z in the sensor frame
   // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1]; g is smooth).
   const double h2 = 2 * config.roughness_hurst;
   for (int i = 0; i <= kRoughnessSteps; ++i) {
@@ -163,8 +165,9 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
     bounds_.max().array() += config.z_margin_m;
   }
   // Per 2×2 cell: which pixels returned and which are edge pixels, and the inputs of σ.
-  cell_flags_.assign(std::size_t(rows_ - 1) * (cols_ - 1), 0);
-  cell_sigma_.resize(cell_flags_.size());
+  const std::size_t cells = std::size_t(rows_ - 1) * (cols_ - 1);
+  cell_flags_.assign(cells + 3, 0);  // 3 bytes of padding: the lanes gather flags 4 bytes at a time
+  cell_sigma_.resize(cells);
   tbb::parallel_for(tbb::blocked_range<int>(0, rows_ - 1), [&](const tbb::blocked_range<int>& rows) {
     for (int r = rows.begin(); r != rows.end(); ++r)
       for (int c = 0; c + 1 < cols_; ++c) {
@@ -221,7 +224,9 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
                        roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data());
   const double var_rho = var_pixel * sum_w2 + rough;
-  return std::sqrt(var_rho) * std::abs(p.dot(cs.normal) / rho) / std::max(std::abs(b.dot(cs.normal)), 0.05);
+  const Eigen::Vector3d& n = cs.normal;
+  const double pn = (p.x() * n.x() + p.y() * n.y()) + p.z() * n.z(), bn = (b.x() * n.x() + b.y() * n.y()) + b.z() * n.z();
+  return std::sqrt(var_rho) * std::abs(pn / rho) / std::max(std::abs(bn), 0.05);
 }
 
 }  // namespace ambler::perception
