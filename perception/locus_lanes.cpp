@@ -131,7 +131,7 @@ AMBLER_AVX512 Lanes rowLanes(const Ctx& k, v8d ax, v8d ay, v8d az, v8i r) {
 }  // namespace
 
 __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const MapGrid& grid, int row, int c0,
-                                                                             int hint, CellResult* out) const {
+                                                                             int n, int hint, CellResult* out) const {
   static_assert(sizeof(CellSigma) == 5 * sizeof(double), "CellSigma is gathered as five doubles");
   static_assert(sizeof(AngleTable::Poly) == 4 * sizeof(double), "Poly is gathered as four doubles");
   if (hint < 0 || hint + 1 >= rows_ || config_.bisection) return 0;
@@ -179,7 +179,7 @@ __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const
     active &= ~walking | (up.ok & down.ok);
     found |= walking & active & (up.delta < splat(0.0)) & (down.delta >= splat(0.0));
   }
-  v8l ok = active & found;
+  v8l ok = active & found & widen(lane < splati(n));  // lanes past the row's end are not cells
   if (!any(ok)) return 0;
 
   // Stage 2, Hermite (LocusMapper::hermiteEstimate): one returned 2×2 cell with no edge pixel.

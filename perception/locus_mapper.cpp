@@ -372,15 +372,19 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
 }
 
 double LocusMapper::hermiteEstimate(const Line& l, int r1, int r2, const Sample& s1, const Sample& s2) const {
-  // Only when the line stays inside one returned 2×2 cell between the scanlines: I is then one
-  // bilinear patch and Δ(φ) smooth, and the cubic's root is within ~1e-8 rad of Δ's.
+  // Δ and dΔ/dφ at both scanlines, each slope from the bilinear patch (2×2 cell) its sample is in,
+  // both patches returned. Where the line stays in one patch, Δ(φ) is smooth between the
+  // scanlines and the cubic's root is within ~1e-8 rad of Δ's. Where it crosses into the next
+  // column's patch, Δ has a kink there and the cubic is only an estimate: the probe pair checks
+  // it either way.
   const int r_cell = std::min(r1, r2);
-  if (s1.c0 != s2.c0 || !(cell_flags_[cellIndex(r_cell, s1.c0)] & kAllReturned) || !(s1.delta < 0 && s2.delta > 0))
+  if (!(cell_flags_[cellIndex(r_cell, s1.c0)] & kAllReturned) || !(cell_flags_[cellIndex(r_cell, s2.c0)] & kAllReturned) ||
+      !(s1.delta < 0 && s2.delta > 0))
     return kNaN;
-  // The patch's partial derivatives at the two samples (fr = 0 on the top scanline, 1 on the bottom).
-  const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + s1.c0;
-  const double p00 = px[0], p01 = px[1], p10 = px[cols_], p11 = px[cols_ + 1];
+  // The patch's partial derivatives at a sample (fr = 0 on the top scanline, 1 on the bottom).
   const auto slopeAt = [&](int r, const Sample& m) {
+    const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + m.c0;
+    const double p00 = px[0], p01 = px[1], p10 = px[cols_], p11 = px[cols_ + 1];
     const double fr = r - r_cell, fc = m.fc;
     const double top = (1 - fc) * p00 + fc * p01, bottom = (1 - fc) * p10 + fc * p11;
     return slope(l, r, m, bottom - top, (1 - fr) * (p01 - p00) + fr * (p11 - p10));
@@ -493,7 +497,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
           int hint = -1;
           for (int c0 = 0; c0 < grid.cols; c0 += kLanes) {
             const int n = std::min(kLanes, grid.cols - c0);
-            const unsigned done = lanes && hint >= 0 && n == kLanes ? mapLanes(grid, r, c0, hint, res) : 0u;
+            const unsigned done = lanes && hint >= 0 ? mapLanes(grid, r, c0, n, hint, res) : 0u;
             if (done) by_lanes += __builtin_popcount(done);
             int next = hint;
             for (int k = 0; k < n; ++k) {

@@ -128,12 +128,12 @@ class LocusMapper {
     float z, sigma;
     int bracket_row;
   };
-  // The cells (row, c0 + k), k < kLanes, of `grid` whose search from `hint` takes the common path
+  // The cells (row, c0 + k), k < n ≤ kLanes, of `grid` whose search from `hint` takes the common path
   // (a bracket within a few scanlines of the hint, the Hermite estimate, a probe pair that
   // closes it, no edge or missing pixel in the final 2×2 cell), in AVX-512 with the scalar
   // search's operations: bit k of the result is set where lane k finished into out[k]
   // (locus_lanes.cpp).
-  unsigned mapLanes(const MapGrid& grid, int row, int c0, int hint, CellResult* out) const;
+  unsigned mapLanes(const MapGrid& grid, int row, int c0, int n, int hint, CellResult* out) const;
   LocusSample atRow(const Line& l, int r) const;
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;
   double sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
