@@ -128,6 +128,65 @@ AMBLER_AVX512 Lanes rowLanes(const Ctx& k, v8d ax, v8d ay, v8d az, v8i r) {
   return out;
 }
 
+
+// The four pixels of a 2×2 cell whose top-left pixel is at index i of the image.
+struct Patch {
+  v8d p00, p01, p10, p11;
+};
+AMBLER_AVX512 Patch patchOf(const Ctx& k, v8i i) {
+  return {gatherFloat(k.range, i), gatherFloat(k.range, i + splati(1)), gatherFloat(k.range, i + splati(k.cols)),
+          gatherFloat(k.range, i + splati(k.cols + 1))};
+}
+AMBLER_AVX512 Patch selectPatch(v8l m, const Patch& a, const Patch& b) {
+  return {select(m, a.p00, b.p00), select(m, a.p01, b.p01), select(m, a.p10, b.p10), select(m, a.p11, b.p11)};
+}
+
+struct Line8 {
+  v8d ax, ay, az, bx, by, bz;
+};
+
+// A sample between scanlines and the scan plane's sine and cosine it was taken on.
+struct PhiSample {
+  Lanes m;
+  v8d sp, cp;
+};
+
+// LocusMapper::atPhi(line, r1, φ) (sinCosNear, then evaluate), for samples inside the 2×2 cell
+// (r1, ca) or (r1, cb), whose pixels are pa and pb (returned, no edge pixels).
+AMBLER_AVX512 PhiSample atPhiLanes(const Ctx& k, const Line8& l, v8i r1, v8d phi1, v8d sr, v8d cr, v8d phi, v8i ca,
+                                   v8i cb, const Patch& pa, const Patch& pb) {
+  PhiSample out;
+  const v8d delta = phi1 - phi, d2 = delta * delta;
+  const v8d sd = delta * (splat(1.0) - d2 / splat(6.0) * (splat(1.0) - d2 / splat(20.0)));
+  const v8d cd = splat(1.0) - d2 / splat(2.0) * (splat(1.0) - d2 / splat(12.0) * (splat(1.0) - d2 / splat(30.0)));
+  const v8d sp = sr * cd - cr * sd, cp = cr * cd + sr * sd;
+  out.sp = sp, out.cp = cp;
+  const v8d den = l.bz * cp - l.by * sp;
+  v8l ok = vabs(den) >= splat(1e-15);
+  const v8d inv = splat(1.0) / den;
+  const v8d rf = (splat(k.phi0) - phi) / splat(k.dphi);
+  Lanes& m = out.m;
+  m.s = -(l.az * cp - l.ay * sp) * inv;
+  const v8d x = l.ax + m.s * l.bx;
+  const v8d lambda = (l.ay + m.s * l.by) * cp + (l.az + m.s * l.bz) * sp;
+  ok &= lambda > splat(0.0);
+  m.rho = vsqrt(x * x + lambda * lambda);
+  const v8d t = x / lambda;
+  ok &= vabs(t) <= splat(k.limit);
+  m.cf = columnOf(k, t, ok);
+  ok &= (m.cf >= splat(0.0)) & (m.cf <= splat(k.last_col)) & (rf >= splat(0.0)) & (rf <= splat(k.last_row));
+  const v8i r0 = mini(toInt(select(ok, rf, splat(0.0))), splati(k.rows - 2));
+  m.c0 = mini(toInt(select(ok, m.cf, splat(0.0))), splati(k.cols - 2));
+  ok &= widen(r0 == r1) & widen((m.c0 == ca) | (m.c0 == cb));  // inside the bracket's cells
+  const Patch p = selectPatch(widen(m.c0 == ca), pa, pb);
+  const v8d fr = rf - toDouble(r0);
+  m.fc = m.cf - toDouble(m.c0);
+  const v8d gr = splat(1.0) - fr, gc = splat(1.0) - m.fc;
+  m.delta = m.rho - (gr * (gc * p.p00 + m.fc * p.p01) + fr * (gc * p.p10 + m.fc * p.p11));
+  m.ok = ok;
+  return out;
+}
+
 }  // namespace
 
 __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const MapGrid& grid, int row, int c0,
@@ -182,23 +241,48 @@ __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const
   v8l ok = active & found & widen(lane < splati(n));  // lanes past the row's end are not cells
   if (!any(ok)) return 0;
 
-  // Stage 2, Hermite (LocusMapper::hermiteEstimate): one returned 2×2 cell with no edge pixel.
+  // Stage 2, the first estimate (intersect): the bracket's 2×2 patches (one, or two next to each
+  // other where the line crosses a column boundary) returned and without edge pixels.
   const v8i r1 = r, r2 = r + splati(1);
-  const v8i cell = selecti(narrow(ok), r1 * splati(cols_ - 1) + up.c0, splati(0));
-  ok &= widen(up.c0 == down.c0) & widen(gatherByte(k.flags, cell) == splati(kAllReturned));
+  const v8i ca = up.c0, cb = down.c0;
+  const v8l cross = widen(ca != cb);
+  const v8i okc = narrow(ok);
+  ok &= widen(gatherByte(k.flags, selecti(okc, r1 * splati(cols_ - 1) + ca, splati(0))) == splati(kAllReturned));
+  ok &= widen(gatherByte(k.flags, selecti(okc, r1 * splati(cols_ - 1) + cb, splati(0))) == splati(kAllReturned));
   ok &= (up.delta < splat(0.0)) & (down.delta > splat(0.0));
-  const v8i px = selecti(narrow(ok), r1 * splati(cols_) + up.c0, splati(0));
-  const v8d p00 = gatherFloat(k.range, px), p01 = gatherFloat(k.range, px + splati(1)),
-            p10 = gatherFloat(k.range, px + splati(cols_)), p11 = gatherFloat(k.range, px + splati(cols_ + 1));
+  ok &= ~cross | widen((ca - cb == splati(1)) | (cb - ca == splati(1)));
+  Patch pa_patch = patchOf(k, selecti(narrow(ok), r1 * splati(cols_) + ca, splati(0)));
+  Patch pb_patch = patchOf(k, selecti(narrow(ok), r1 * splati(cols_) + cb, splati(0)));
+  const v8d phi1 = gather(k.phi, r1), phi2 = gather(k.phi, r2);
+  const v8d sr = gather(k.sin_phi, r1), cr = gather(k.cos_phi, r1);
   const v8d bx = splat(k.bx), by = splat(k.by), bz = splat(k.bz);
-  v8d slopes[2];
-  for (int e = 0; e < 2; ++e) {  // LocusMapper::slope at r1 (fr = 0) and r2 (fr = 1)
-    const Lanes& m = e == 0 ? up : down;
+  const Line8 line{ax, ay, az, bx, by, bz};
+  // Across a column boundary: Δ where the chord of the column coordinate meets it, taken into
+  // the bracket.
+  const v8d boundary = toDouble(selecti(cb < ca, ca, cb));
+  const v8d phi_b = phi1 + (boundary - up.cf) / (down.cf - up.cf) * (phi2 - phi1);
+  ok &= ~cross | ((phi_b - phi1) * (phi_b - phi2) < splat(0.0));
+  const PhiSample mid = atPhiLanes(k, line, r1, phi1, sr, cr, phi_b, ca, cb, pa_patch, pb_patch);
+  ok &= ~cross | mid.m.ok;
+  const v8l mid_lo = cross & (mid.m.delta < splat(0.0));  // [φ_b, φ(r2)]: r2's patch
+  const v8l mid_hi = cross & ~mid_lo;                      // [φ(r1), φ_b]: r1's patch
+  v8d phi_lo = select(mid_lo, phi_b, phi1), phi_hi = select(mid_hi, phi_b, phi2);
+  const Lanes lo0 = selectLanes(mid_lo, mid.m, up), hi0 = selectLanes(mid_hi, mid.m, down);
+  ok &= (lo0.delta < splat(0.0)) & (hi0.delta > splat(0.0));
+  const v8i c_patch = selecti(narrow(mid_lo), cb, ca);
+  const Patch patch = selectPatch(widen(c_patch == ca), pa_patch, pb_patch);
+  // dΔ/dφ at both ends in that patch (LocusMapper::slopeInPatch).
+  v8d g[2];
+  for (int e = 0; e < 2; ++e) {
+    const Lanes& m = e == 0 ? lo0 : hi0;
+    const v8l at_mid = e == 0 ? mid_lo : mid_hi;
     const v8i rr = e == 0 ? r1 : r2;
-    const v8d fr = splat(double(e)), fc = m.fc;
-    const v8d top = (splat(1.0) - fc) * p00 + fc * p01, bottom = (splat(1.0) - fc) * p10 + fc * p11;
-    const v8d dI_dfr = bottom - top, dI_dfc = (splat(1.0) - fr) * (p01 - p00) + fr * (p11 - p10);
-    const v8d sp = gather(k.sin_phi, rr), cp = gather(k.cos_phi, rr), inv_den = gather(k.inv_den, rr);
+    const v8d sp = select(at_mid, mid.sp, gather(k.sin_phi, rr)), cp = select(at_mid, mid.cp, gather(k.cos_phi, rr));
+    const v8d inv_den = select(at_mid, splat(1.0) / (bz * mid.cp - by * mid.sp), gather(k.inv_den, rr));
+    const v8d fr = select(at_mid, (splat(k.phi0) - phi_b) / splat(k.dphi) - toDouble(r1), splat(double(e)));
+    const v8d fc = select(at_mid | widen(m.c0 != c_patch), m.cf - toDouble(c_patch), m.fc);
+    const v8d top = (splat(1.0) - fc) * patch.p00 + fc * patch.p01, bottom = (splat(1.0) - fc) * patch.p10 + fc * patch.p11;
+    const v8d dI_dfr = bottom - top, dI_dfc = (splat(1.0) - fr) * (patch.p01 - patch.p00) + fr * (patch.p11 - patch.p10);
     const v8d dnum = -az * sp - ay * cp, dden = -bz * sp - by * cp;
     const v8d ds = -(dnum + m.s * dden) * inv_den;
     const v8d qx = ax + m.s * bx, qy = ay + m.s * by, qz = az + m.s * bz;
@@ -206,11 +290,12 @@ __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const
     const v8d inv = splat(1.0) / (m.rho * lateral);
     const v8d drho = ((qx * bx + qy * by) + qz * bz) * ds * lateral * inv;
     const v8d dtheta = (bx * ds * m.rho - qx * drho) * inv;
-    slopes[e] = drho - (dI_dfr * splat(k.neg_inv_dphi) + dI_dfc * dtheta * splat(k.inv_dtheta));
+    g[e] = drho - (dI_dfr * splat(k.neg_inv_dphi) + dI_dfc * dtheta * splat(k.inv_dtheta));
   }
-  const v8d phi1 = gather(k.phi, r1), phi2 = gather(k.phi, r2), h = phi2 - phi1;
-  const v8d y0 = up.delta, y1 = down.delta;
-  const v8d m0 = slopes[0] * h, m1 = slopes[1] * h;
+  // LocusMapper::hermiteRoot.
+  const v8d h = phi_hi - phi_lo;
+  const v8d y0 = lo0.delta, y1 = hi0.delta;
+  const v8d m0 = g[0] * h, m1 = g[1] * h;
   const v8d c2 = splat(-3.0) * y0 - splat(2.0) * m0 + splat(3.0) * y1 - m1;
   const v8d c3 = splat(2.0) * y0 + m0 - splat(2.0) * y1 + m1;
   v8d t = y0 / (y0 - y1), t_neg = splat(0.0), t_pos = splat(1.0);
@@ -222,48 +307,20 @@ __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const
     const v8d next = t - H / dH;
     t = select((next - t_neg) * (next - t_pos) < splat(0.0), next, splat(0.5) * (t_neg + t_pos));
   }
-  const v8d first = phi1 + t * h;
+  const v8d first = phi_lo + t * h;
   const double eps = config_.epsilon_rad;
-  ok &= vabs(phi2 - phi1) >= splat(2 * eps);
+  ok &= vabs(phi_hi - phi_lo) >= splat(2 * eps);
 
-  // The probe pair (intersect's probePair): pa the one nearer φ(r1).
+  // The probe pair (intersect's probePair): pa the one nearer φ_lo.
   const v8d hp = splat(0.499 * eps);
   v8d pa = first - hp, pb = first + hp;
-  const v8l swap = vabs(pa - phi1) > vabs(pb - phi1);
+  const v8l swap = vabs(pa - phi_lo) > vabs(pb - phi_lo);
   const v8d pa0 = pa;
   pa = select(swap, pb, pa), pb = select(swap, pa0, pb);
-  ok &= ((pa - phi1) * (pa - phi2) < splat(0.0)) & ((pb - phi1) * (pb - phi2) < splat(0.0));
-  const v8d sr = gather(k.sin_phi, r1), cr = gather(k.cos_phi, r1);
-  Lanes probe[2];
-  for (int e = 0; e < 2; ++e) {  // LocusMapper::atPhi(line, r1, φ) and evaluate()
-    const v8d phi = e == 0 ? pa : pb;
-    const v8d delta = phi1 - phi, d2 = delta * delta;
-    const v8d sd = delta * (splat(1.0) - d2 / splat(6.0) * (splat(1.0) - d2 / splat(20.0)));
-    const v8d cd = splat(1.0) - d2 / splat(2.0) * (splat(1.0) - d2 / splat(12.0) * (splat(1.0) - d2 / splat(30.0)));
-    const v8d sp = sr * cd - cr * sd, cp = cr * cd + sr * sd;
-    const v8d den = bz * cp - by * sp;
-    v8l pok = vabs(den) >= splat(1e-15);
-    const v8d inv = splat(1.0) / den;
-    const v8d rf = (splat(k.phi0) - phi) / splat(k.dphi);
-    Lanes& m = probe[e];
-    m.s = -(az * cp - ay * sp) * inv;
-    const v8d x = ax + m.s * bx;
-    const v8d lambda = (ay + m.s * by) * cp + (az + m.s * bz) * sp;
-    pok &= lambda > splat(0.0);
-    m.rho = vsqrt(x * x + lambda * lambda);
-    const v8d tt = x / lambda;
-    pok &= vabs(tt) <= splat(k.limit);
-    m.cf = columnOf(k, tt, pok);
-    pok &= (m.cf >= splat(0.0)) & (m.cf <= splat(k.last_col)) & (rf >= splat(0.0)) & (rf <= splat(k.last_row));
-    const v8i pr0 = mini(toInt(select(pok, rf, splat(0.0))), splati(rows_ - 2));
-    m.c0 = mini(toInt(select(pok, m.cf, splat(0.0))), splati(cols_ - 2));
-    pok &= widen(pr0 == r1) & widen(m.c0 == up.c0);  // inside the bracket's cell
-    const v8d fr = rf - toDouble(pr0);
-    m.fc = m.cf - toDouble(m.c0);
-    const v8d gr = splat(1.0) - fr, gc = splat(1.0) - m.fc;
-    m.delta = m.rho - (gr * (gc * p00 + m.fc * p01) + fr * (gc * p10 + m.fc * p11));
-    m.ok = pok;
-  }
+  ok &= ((pa - phi_lo) * (pa - phi_hi) < splat(0.0)) & ((pb - phi_lo) * (pb - phi_hi) < splat(0.0));
+  const PhiSample probe_a = atPhiLanes(k, line, r1, phi1, sr, cr, pa, ca, cb, pa_patch, pb_patch);
+  const PhiSample probe_b = atPhiLanes(k, line, r1, phi1, sr, cr, pb, ca, cb, pa_patch, pb_patch);
+  const Lanes probe[2] = {probe_a.m, probe_b.m};
   const Lanes& lo = probe[0];
   const Lanes& hi = probe[1];
   // The bracket closes: Δ(pa) < 0 ≤ Δ(pb), and intersect's loop would stop.

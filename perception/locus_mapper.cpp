@@ -108,9 +108,8 @@ Sample LocusMapper::evaluate(const Line& l, double rf, double sp, double cp, dou
   return out;
 }
 
-double LocusMapper::slope(const Line& l, int r, const Sample& m, double dI_dfr, double dI_dfc) const {
-  const double sp = sin_phi_[r], cp = cos_phi_[r];
-  const double inv_den = l.inv_den ? l.inv_den[r] : 1.0 / (l.b.z() * cp - l.b.y() * sp);
+double LocusMapper::slope(const Line& l, double sp, double cp, double inv_den, const Sample& m, double dI_dfr,
+                          double dI_dfc) const {
   const double dnum = -l.a.z() * sp - l.a.y() * cp, dden = -l.b.z() * sp - l.b.y() * cp;
   const double ds = -(dnum + m.s * dden) * inv_den;  // s = −N/D, so s' = −(N' + s·D')/D
   const double px = l.a.x() + m.s * l.b.x(), py = l.a.y() + m.s * l.b.y(), pz = l.a.z() + m.s * l.b.z();
@@ -342,7 +341,34 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
     }
     return true;
   };
-  const double first = config_.bisection ? kNaN : hermiteEstimate(line, r1, r2, lo, hi);
+  // The first estimate (docs/locus.md): the root of the Hermite cubic through Δ and dΔ/dφ at the
+  // bracket's ends, where Δ(φ) is smooth between them — the line stays in one returned 2×2 patch.
+  // Where it crosses into the next column's patch, Δ has a kink at the column boundary: Δ is
+  // evaluated first where the chord of the column coordinate meets that boundary, which leaves
+  // the bracket on one side of it (up to the chord's error), and the cubic is fitted there with
+  // that side's patch.
+  double first = kNaN;
+  const int r_cell = std::min(r1, r2);
+  if (!config_.bisection && s1.delta < 0 && s2.delta > 0 && (cell_flags_[cellIndex(r_cell, s1.c0)] & kAllReturned) &&
+      (cell_flags_[cellIndex(r_cell, s2.c0)] & kAllReturned)) {
+    if (s1.c0 == s2.c0) {
+      first = hermiteRoot(phi_lo, lo.delta, slopeInPatch(line, r1, phi_lo, r1, lo, r_cell, s1.c0), phi_hi, hi.delta,
+                          slopeInPatch(line, r1, phi_hi, r2, hi, r_cell, s2.c0));
+    } else if (std::abs(s1.c0 - s2.c0) == 1) {
+      const int boundary = std::max(s1.c0, s2.c0);
+      const double phi_b = phi_lo + (boundary - s1.cf) / (s2.cf - s1.cf) * (phi_hi - phi_lo);
+      if ((phi_b - phi_lo) * (phi_b - phi_hi) < 0) {
+        if (!take(phi_b, eval(phi_b))) return hit;  // a pixel without a return: unknown
+        // The side of the boundary the bracket is now on: its scanline end's patch.
+        const bool near_side = phi_hi == phi_b;  // [φ(r1), φ_b]: r1's patch
+        const int c_patch = near_side ? s1.c0 : s2.c0;
+        if (lo.delta < 0 && hi.delta > 0)
+          first = hermiteRoot(phi_lo, lo.delta,
+                              slopeInPatch(line, r1, phi_lo, near_side ? r1 : -1, lo, r_cell, c_patch), phi_hi,
+                              hi.delta, slopeInPatch(line, r1, phi_hi, near_side ? -1 : r2, hi, r_cell, c_patch));
+      }
+    }
+  }
   double width_before = std::numeric_limits<double>::infinity();  // the width two steps ago
   for (int it = 0; it < 200 && std::abs(phi_hi - phi_lo) >= eps && hi.delta != 0.0; ++it) {
     const double width = std::abs(phi_hi - phi_lo);
@@ -371,32 +397,32 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
   return hit;
 }
 
-double LocusMapper::hermiteEstimate(const Line& l, int r1, int r2, const Sample& s1, const Sample& s2) const {
-  // Δ and dΔ/dφ at both scanlines, each slope from the bilinear patch (2×2 cell) its sample is in,
-  // both patches returned. Where the line stays in one patch, Δ(φ) is smooth between the
-  // scanlines and the cubic's root is within ~1e-8 rad of Δ's. Where it crosses into the next
-  // column's patch, Δ has a kink there and the cubic is only an estimate: the probe pair checks
-  // it either way.
-  const int r_cell = std::min(r1, r2);
-  if (!(cell_flags_[cellIndex(r_cell, s1.c0)] & kAllReturned) || !(cell_flags_[cellIndex(r_cell, s2.c0)] & kAllReturned) ||
-      !(s1.delta < 0 && s2.delta > 0))
-    return kNaN;
-  // The patch's partial derivatives at a sample (fr = 0 on the top scanline, 1 on the bottom).
-  const auto slopeAt = [&](int r, const Sample& m) {
-    const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + m.c0;
-    const double p00 = px[0], p01 = px[1], p10 = px[cols_], p11 = px[cols_ + 1];
-    const double fr = r - r_cell, fc = m.fc;
-    const double top = (1 - fc) * p00 + fc * p01, bottom = (1 - fc) * p10 + fc * p11;
-    return slope(l, r, m, bottom - top, (1 - fr) * (p01 - p00) + fr * (p11 - p10));
-  };
-  const double phi1 = image_.phi[r1], h = image_.phi[r2] - phi1;
-  const double y0 = s1.delta, y1 = s2.delta;
-  const double m0 = slopeAt(r1, s1) * h, m1 = slopeAt(r2, s2) * h;
+double LocusMapper::slopeInPatch(const Line& l, int r1, double phi_m, int r_m, const Sample& m, int r_cell,
+                                 int c_cell) const {
+  double sp, cp, inv_den;
+  if (r_m >= 0) {  // on scanline r_m: the tables
+    sp = sin_phi_[r_m], cp = cos_phi_[r_m];
+    inv_den = l.inv_den ? l.inv_den[r_m] : 1.0 / (l.b.z() * cp - l.b.y() * sp);
+  } else {  // between scanlines: as atPhi(l, r1, φ) has it
+    sinCosNear(sin_phi_[r1], cos_phi_[r1], image_.phi[r1] - phi_m, sp, cp);
+    inv_den = 1.0 / (l.b.z() * cp - l.b.y() * sp);
+  }
+  const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + c_cell;
+  const double p00 = px[0], p01 = px[1], p10 = px[cols_], p11 = px[cols_ + 1];
+  const double fr = r_m >= 0 ? double(r_m - r_cell) : (phi0_ - phi_m) / dphi_ - r_cell;
+  const double fc = r_m >= 0 && m.c0 == c_cell ? m.fc : m.cf - c_cell;
+  const double top = (1 - fc) * p00 + fc * p01, bottom = (1 - fc) * p10 + fc * p11;
+  return slope(l, sp, cp, inv_den, m, bottom - top, (1 - fr) * (p01 - p00) + fr * (p11 - p10));
+}
+
+double LocusMapper::hermiteRoot(double phi_a, double y0, double g0, double phi_b, double y1, double g1) {
+  const double h = phi_b - phi_a;
+  const double m0 = g0 * h, m1 = g1 * h;
   const double c2 = -3 * y0 - 2 * m0 + 3 * y1 - m1, c3 = 2 * y0 + m0 - 2 * y1 + m1;
   // Two Newton steps on the cubic from the chord, each kept inside the part of [0, 1] where it
-  // changes sign. The chord errs by ~1e-2 of the scanline spacing; Newton converges
-  // quadratically, so two steps leave ~1e-8 of it (~1e-10 rad), far inside the probe pair's ε/2.
-  // Where they do not (the probe pair then fails to straddle the root), the search goes on.
+  // changes sign. The chord errs by ~1e-2 of the interval; Newton converges quadratically, so two
+  // steps leave ~1e-8 of it (~1e-10 rad), far inside the probe pair's ε/2. Where they do not
+  // (the probe pair then fails to straddle the root), the search goes on.
   double t = y0 / (y0 - y1), t_neg = 0, t_pos = 1;
   for (int k = 0; k < 2; ++k) {
     const double H = y0 + t * (m0 + t * (c2 + t * c3)), dH = m0 + t * (2 * c2 + 3 * t * c3);
@@ -404,7 +430,7 @@ double LocusMapper::hermiteEstimate(const Line& l, int r1, int r2, const Sample&
     const double next = t - H / dH;
     t = (next - t_neg) * (next - t_pos) < 0 ? next : 0.5 * (t_neg + t_pos);
   }
-  return phi1 + t * h;
+  return phi_a + t * h;
 }
 
 // Between the last scanline that sees the near side of an occluding edge and the first that sees

@@ -94,9 +94,18 @@ class LocusMapper {
   // Δ = ρ_line − I at fractional row rf, whose scan angle has sine sp and cosine cp; inv_den is
   // 1/(b_z·cp − b_y·sp) (0: the line is parallel to that scan plane).
   LocusSample evaluate(const Line& l, double rf, double sp, double cp, double inv_den) const;
-  // dΔ/dφ at a sample m taken on scanline r, where the image's bilinear patch has the partial
-  // derivatives dI_dfr (across scanlines) and dI_dfc (along them).
-  double slope(const Line& l, int r, const LocusSample& m, double dI_dfr, double dI_dfc) const;
+  // dΔ/dφ at a sample m taken where the scan angle has sine sp and cosine cp, with
+  // inv_den = 1/(b_z·cp − b_y·sp), where the image's bilinear patch has the partial derivatives
+  // dI_dfr (across scanlines) and dI_dfc (along them).
+  double slope(const Line& l, double sp, double cp, double inv_den, const LocusSample& m, double dI_dfr,
+               double dI_dfc) const;
+  // dΔ/dφ at sample m, taken on scanline r_m (r_m ≥ 0) or at φ_m between scanlines (r_m = −1, as
+  // atPhi(l, r1, φ_m) takes it), with I the bilinear patch of the 2×2 cell (r_cell, c_cell).
+  double slopeInPatch(const Line& l, int r1, double phi_m, int r_m, const LocusSample& m, int r_cell,
+                      int c_cell) const;
+  // The root in [φa, φb] of the cubic Hermite interpolant through (φa, y0 < 0, slope g0) and
+  // (φb, y1 > 0, slope g1).
+  static double hermiteRoot(double phi_a, double y0, double g0, double phi_b, double y1, double g1);
   // (f(x) − offset)·scale for f = asin or atan, tabulated (see the constructor): with f = atan and
   // x = tan θ, the column coordinate (θ − θ0)/Δθ; with f = asin and x = sin φ in the scan plane,
   // the row coordinate (φ0 − φ)/Δφ. Quadratic Taylor polynomials about the middles of kSize
@@ -138,9 +147,6 @@ class LocusMapper {
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;
   double sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
                         const Eigen::Vector3d& b) const;
-  // The first estimate of the root between scanlines r1 (sample s1, Δ < 0) and r2 = r1 ± 1 (s2,
-  // Δ > 0): the root of their Hermite cubic, or NaN where that does not apply.
-  double hermiteEstimate(const Line& l, int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
   // At an occluding edge across the scanlines r1 (s1) and r2 = r1 ± 1 (s2): does the line meet
   // either surface, extended past its last sample, between the two scanlines?
   bool meetsSurfaceInGap(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
