@@ -1,7 +1,7 @@
 // The locus search's common case for maps, eight cells at a time in AVX-512 (docs/locus.md,
 // "Lanes"). Lane k is map cell (row, c0 + k), a vertical line. Each lane repeats, operation for
 // operation, what the scalar search (locus_mapper.cpp) does when
-//   - the scanline walk from the hint finds the bracket within kMaxSteps steps, every sample on the
+//   - the scanline walk from the hint finds the bracket within kHintSteps steps, every sample on the
 //     way valid (in front, inside the image, its pixels returned, tan θ inside the table),
 //   - the bracket's 2×2 cell has all four pixels returned and no edge pixel,
 //   - the Hermite estimate's probe pair falls inside that cell and closes the bracket,
@@ -40,7 +40,6 @@ typedef double v8d __attribute__((vector_size(64)));
 typedef long long v8l __attribute__((vector_size(64)));
 typedef int v8i __attribute__((vector_size(32)));
 
-constexpr int kMaxSteps = 3;  // scanlines the lanes walk from the hint before leaving it to the scalar search
 
 AMBLER_AVX512 v8d splat(double x) { return v8d{x, x, x, x, x, x, x, x}; }
 AMBLER_AVX512 v8i splati(int x) { return v8i{x, x, x, x, x, x, x, x}; }
@@ -87,15 +86,16 @@ struct Ctx {
   const double *sin_phi, *cos_phi, *inv_den, *phi, *poly, *sigma, *g;
   const float* range;
   const std::uint8_t* flags;
-  double bx, by, bz, limit, index_scale, last_col, last_row, phi0, dphi, neg_inv_dphi, inv_dtheta;
+  double bx, by, bz, limit, index_scale, step, last_col, last_row, phi0, inv_dphi, neg_inv_dphi, inv_dtheta;
   int rows, cols;
 };
 
 // (asin/atan table) AngleTable::operator() inside its range: c0 + d·(c1 + d·c2), d = t − x.
 AMBLER_AVX512 v8d columnOf(const Ctx& k, v8d t, v8l in) {
-  const v8i idx = toInt((select(in, t, splat(0.0)) + splat(k.limit)) * splat(k.index_scale)) * splati(4);
-  const v8d ex = gather(k.poly, idx), c0 = gather(k.poly, idx + 1), c1 = gather(k.poly, idx + 2),
-            c2 = gather(k.poly, idx + 3);
+  const v8i i = toInt((select(in, t, splat(0.0)) + splat(k.limit)) * splat(k.index_scale)), idx = i * splati(4);
+  // The interval's middle as the table's constructor computed it (one gather fewer).
+  const v8d ex = splat(-k.limit) + (toDouble(i) + splat(0.5)) * splat(k.step);
+  const v8d c0 = gather(k.poly, idx + 1), c1 = gather(k.poly, idx + 2), c2 = gather(k.poly, idx + 3);
   const v8d d = t - ex;
   return c0 + d * (c1 + d * c2);
 }
@@ -157,14 +157,14 @@ AMBLER_AVX512 PhiSample atPhiLanes(const Ctx& k, const Line8& l, v8i r1, v8d phi
                                    v8i cb, const Patch& pa, const Patch& pb) {
   PhiSample out;
   const v8d delta = phi1 - phi, d2 = delta * delta;
-  const v8d sd = delta * (splat(1.0) - d2 / splat(6.0) * (splat(1.0) - d2 / splat(20.0)));
-  const v8d cd = splat(1.0) - d2 / splat(2.0) * (splat(1.0) - d2 / splat(12.0) * (splat(1.0) - d2 / splat(30.0)));
+  const v8d sd = delta * (splat(1.0) - d2 * splat(kInv6) * (splat(1.0) - d2 * splat(kInv20)));
+  const v8d cd = splat(1.0) - d2 * splat(0.5) * (splat(1.0) - d2 * splat(kInv12) * (splat(1.0) - d2 * splat(kInv30)));
   const v8d sp = sr * cd - cr * sd, cp = cr * cd + sr * sd;
   out.sp = sp, out.cp = cp;
   const v8d den = l.bz * cp - l.by * sp;
   v8l ok = vabs(den) >= splat(1e-15);
   const v8d inv = splat(1.0) / den;
-  const v8d rf = (splat(k.phi0) - phi) / splat(k.dphi);
+  const v8d rf = (splat(k.phi0) - phi) * splat(k.inv_dphi);
   Lanes& m = out.m;
   m.s = -(l.az * cp - l.ay * sp) * inv;
   const v8d x = l.ax + m.s * l.bx;
@@ -199,8 +199,8 @@ __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const
   k.phi = image_.phi.data(), k.poly = &column_of_.polys[0].x, k.sigma = &cell_sigma_[0].normal.x();
   k.g = roughness_g_.data(), k.range = image_.range.data(), k.flags = cell_flags_.data();
   k.bx = up_.x(), k.by = up_.y(), k.bz = up_.z();
-  k.limit = column_of_.limit, k.index_scale = column_of_.index_scale;
-  k.last_col = last_col_, k.last_row = last_row_, k.phi0 = phi0_, k.dphi = dphi_;
+  k.limit = column_of_.limit, k.index_scale = column_of_.index_scale, k.step = column_of_.step;
+  k.last_col = last_col_, k.last_row = last_row_, k.phi0 = phi0_, k.inv_dphi = inv_dphi_;
   k.neg_inv_dphi = -1.0 / dphi_, k.inv_dtheta = inv_dtheta_;
   k.rows = rows_, k.cols = cols_;
 
@@ -220,7 +220,7 @@ __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const
   v8l active = up.ok & down.ok;
   v8l found = active & (up.delta < splat(0.0)) & (down.delta >= splat(0.0));
   const v8i step = selecti(narrow(down.delta < splat(0.0)), splati(1), splati(-1));
-  for (int it = 0; it < kMaxSteps; ++it) {
+  for (int it = 0; it < kHintSteps; ++it) {
     v8l walking = active & ~found;
     if (!any(walking)) break;
     const v8l downward = widen(step > splati(0));
@@ -279,7 +279,7 @@ __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const
     const v8i rr = e == 0 ? r1 : r2;
     const v8d sp = select(at_mid, mid.sp, gather(k.sin_phi, rr)), cp = select(at_mid, mid.cp, gather(k.cos_phi, rr));
     const v8d inv_den = select(at_mid, splat(1.0) / (bz * mid.cp - by * mid.sp), gather(k.inv_den, rr));
-    const v8d fr = select(at_mid, (splat(k.phi0) - phi_b) / splat(k.dphi) - toDouble(r1), splat(double(e)));
+    const v8d fr = select(at_mid, (splat(k.phi0) - phi_b) * splat(k.inv_dphi) - toDouble(r1), splat(double(e)));
     const v8d fc = select(at_mid | widen(m.c0 != c_patch), m.cf - toDouble(c_patch), m.fc);
     const v8d top = (splat(1.0) - fc) * patch.p00 + fc * patch.p01, bottom = (splat(1.0) - fc) * patch.p10 + fc * patch.p11;
     const v8d dI_dfr = bottom - top, dI_dfc = (splat(1.0) - fr) * (patch.p01 - patch.p00) + fr * (patch.p11 - patch.p10);
@@ -337,7 +337,7 @@ __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const
   const v8i c_cell = selecti(narrow(ok), selecti(toInt(cf) < splati(0), splati(0), mini(toInt(cf), splati(cols_ - 2))),
                              splati(0));
   const v8d rho = lo.rho + tt * (hi.rho - lo.rho);
-  const v8d fr = clamp((splat(k.phi0) - phi) / splat(k.dphi) - toDouble(r1), splat(0.0), splat(1.0));
+  const v8d fr = clamp((splat(k.phi0) - phi) * splat(k.inv_dphi) - toDouble(r1), splat(0.0), splat(1.0));
   const v8d fc = clamp(cf - toDouble(c_cell), splat(0.0), splat(1.0));
   const v8d qx = ax + s * bx, qy = ay + s * by, qz = az + s * bz;
   const v8d gr = splat(1.0) - fr, gc = splat(1.0) - fc;
@@ -362,7 +362,7 @@ __attribute__((target("avx512f,avx512dq"))) unsigned LocusMapper::mapLanes(const
   const v8d var_rho = var_pixel * sum_w2 + rough;
   const v8d pn = (qx * nx + qy * ny) + qz * nz, bn = (bx * nx + by * ny) + bz * nz;
   const v8d abs_bn = vabs(bn);
-  const v8d sigma = vsqrt(var_rho) * vabs(pn / rho) / select(abs_bn < splat(0.05), splat(0.05), abs_bn);
+  const v8d sigma = vsqrt(var_rho) * vabs(pn) / (rho * select(abs_bn < splat(0.05), splat(0.05), abs_bn));
 
   const unsigned done = bits(ok);
   alignas(64) double zs[8], sigmas[8];

@@ -52,11 +52,12 @@ bool insidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector
 }
 
 // sin and cos of φ_r − δ for |δ| within a scanline (≤ 0.01 rad): angle addition with Taylor series
-// of sin δ and cos δ to δ⁵ and δ⁶ (error < 1e-16), cheaper than a libm call per evaluation.
+// of sin δ and cos δ to δ⁵ and δ⁶ (error < 1e-16), cheaper than a libm call per evaluation. The
+// lanes (locus_lanes.cpp) do the same operations.
 void sinCosNear(double sr, double cr, double delta, double& sp, double& cp) {
   const double d2 = delta * delta;
-  const double sd = delta * (1 - d2 / 6 * (1 - d2 / 20));
-  const double cd = 1 - d2 / 2 * (1 - d2 / 12 * (1 - d2 / 30));
+  const double sd = delta * (1 - d2 * kInv6 * (1 - d2 * kInv20));
+  const double cd = 1 - d2 * 0.5 * (1 - d2 * kInv12 * (1 - d2 * kInv30));
   sp = sr * cd - cr * sd;
   cp = cr * cd + sr * sd;
 }
@@ -175,7 +176,7 @@ Sample LocusMapper::atPhi(const Line& l, int r_ref, double phi) const {
   double sp, cp;
   sinCosNear(sin_phi_[r_ref], cos_phi_[r_ref], image_.phi[r_ref] - phi, sp, cp);
   const double den = l.b.z() * cp - l.b.y() * sp;
-  return evaluate(l, (phi0_ - phi) / dphi_, sp, cp, std::abs(den) < 1e-15 ? 0.0 : 1.0 / den);
+  return evaluate(l, (phi0_ - phi) * inv_dphi_, sp, cp, std::abs(den) < 1e-15 ? 0.0 : 1.0 / den);
 }
 
 LocusMapper::Line LocusMapper::lineOf(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
@@ -219,7 +220,7 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
       if (up.delta < 0 && down.delta >= 0) r1 = r, r2 = r + 1, s1 = up, s2 = down;
       else step = down.delta < 0 ? 1 : -1;  // the crossing is further down the image, or up
     }
-    for (int k = 0; step != 0 && r1 < 0 && k < rows; ++k) {
+    for (int k = 0; step != 0 && r1 < 0 && k < kHintSteps; ++k) {
       if (step > 0) {
         if (r + 2 >= rows) break;
         ++r, up = down, down = at(r + 1);
@@ -409,7 +410,7 @@ double LocusMapper::slopeInPatch(const Line& l, int r1, double phi_m, int r_m, c
   }
   const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + c_cell;
   const double p00 = px[0], p01 = px[1], p10 = px[cols_], p11 = px[cols_ + 1];
-  const double fr = r_m >= 0 ? double(r_m - r_cell) : (phi0_ - phi_m) / dphi_ - r_cell;
+  const double fr = r_m >= 0 ? double(r_m - r_cell) : (phi0_ - phi_m) * inv_dphi_ - r_cell;
   const double fc = r_m >= 0 && m.c0 == c_cell ? m.fc : m.cf - c_cell;
   const double top = (1 - fc) * p00 + fc * p01, bottom = (1 - fc) * p10 + fc * p11;
   return slope(l, sp, cp, inv_den, m, bottom - top, (1 - fr) * (p01 - p00) + fr * (p11 - p10));
@@ -501,7 +502,7 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   const int r_cell = std::min(r1, r2), c_cell = std::clamp(int(cf), 0, cols_ - 2);
   hit.theta = theta0_ + dtheta_ * cf;
   hit.rho = lo.rho + t * (hi.rho - lo.rho);
-  hit.sigma = sigmaAlongLine(r_cell, c_cell, std::clamp((phi0_ - phi) / dphi_ - r_cell, 0.0, 1.0),
+  hit.sigma = sigmaAlongLine(r_cell, c_cell, std::clamp((phi0_ - phi) * inv_dphi_ - r_cell, 0.0, 1.0),
                              std::clamp(cf - c_cell, 0.0, 1.0), hit.rho, line.a + hit.s * line.b, line.b);
 }
 

@@ -115,7 +115,7 @@ class LocusMapper {
       double x, c0, c1, c2;  // ≈ c0 + c1·(x' − x) + c2·(x' − x)² near x
     };
     bool is_atan = false;
-    double offset = 0, scale = 1, limit = 0, index_scale = 0;
+    double offset = 0, scale = 1, limit = 0, index_scale = 0, step = 0;  // step: the intervals' width
     std::vector<Poly> polys;
     AngleTable() = default;
     AngleTable(bool atan, double limit, double offset, double scale);
@@ -167,7 +167,7 @@ class LocusMapper {
   int rows_, cols_;
   std::vector<double> roughness_g_;  // the fBm interpolation factor, tabulated over f
   double phi0_, dphi_, theta0_, dtheta_;
-  double inv_dtheta_;
+  double inv_dtheta_, inv_dphi_;
   double quantization_var_;  // q²/12
   double last_row_, last_col_;  // rows − 1 and cols − 1: the largest fractional row and column
   std::vector<double> sin_phi_, cos_phi_, sin_theta_, cos_theta_;

@@ -147,6 +147,7 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
     cos_theta_.push_back(std::cos(theta));
   }
   inv_dtheta_ = 1.0 / dtheta_;
+  inv_dphi_ = 1.0 / dphi_;
   quantization_var_ = config.quantization_m * config.quantization_m / 12.0;
   last_row_ = rows_ - 1;
   last_col_ = cols_ - 1;
@@ -191,9 +192,10 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
 // (|f‴| ≤ 2, limit 3) below 1.3e-10 rad; for asin (f‴ = (1 + 2x²)/(1 − x²)^(5/2), limit 0.95)
 // below 3e-11 rad for |x| ≤ sin 45° and 2e-9 rad at the table's end (asinf errs by 6e-8).
 LocusMapper::AngleTable::AngleTable(bool atan, double limit_, double offset_, double scale_)
-    : is_atan(atan), offset(offset_), scale(scale_), limit(limit_), index_scale(kSize / (2 * limit_)) {
+    : is_atan(atan), offset(offset_), scale(scale_), limit(limit_), index_scale(kSize / (2 * limit_)),
+      step(2 * limit_ / kSize) {
   for (int k = 0; k < kSize; ++k) {
-    const double x = -limit + (k + 0.5) * (2 * limit / kSize);
+    const double x = -limit + (k + 0.5) * step;  // the lanes compute it the same way
     double f, d1, d2;  // f, f′ and f″/2 at x
     if (atan) {
       const double q = 1.0 + x * x;
@@ -226,7 +228,7 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   const double var_rho = var_pixel * sum_w2 + rough;
   const Eigen::Vector3d& n = cs.normal;
   const double pn = (p.x() * n.x() + p.y() * n.y()) + p.z() * n.z(), bn = (b.x() * n.x() + b.y() * n.y()) + b.z() * n.z();
-  return std::sqrt(var_rho) * std::abs(pn / rho) / std::max(std::abs(bn), 0.05);
+  return std::sqrt(var_rho) * std::abs(pn) / (rho * std::max(std::abs(bn), 0.05));
 }
 
 }  // namespace ambler::perception
