@@ -511,28 +511,38 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
   std::atomic<long> by_lanes{0};
   const Eigen::Vector3d v = Eigen::Vector3d::UnitZ();
   const bool lanes = config_.vectorized && lanesAvailable();
-  // One task per map row: rows cost very different amounts (unseen rows are cheap), and small
-  // tasks keep both cores busy to the end. Rows are independent (each starts without a hint), so
-  // the map is the same however it is split. Within a row, cells go in groups of kLanes: every
+  // Tasks of whole map rows, about 256 cells each: rows cost very different amounts (unseen rows
+  // are cheap), small tasks keep both cores busy to the end, and tasks much smaller than that
+  // cost more to hand out than they take (10 cm cells: 2-core speedup 1.73-1.91 with one row per
+  // task, 1.93-1.97 with two). Rows are independent (each starts without a hint), so the map is
+  // the same however it is split. Within a row, cells go in groups of kLanes: every
   // cell of a group starts its scanline search from the same hint — the last bracket found in the
-  // groups before it — so the lanes and the scalar search give the same map.
+  // groups before it, or, in a group that starts without one, the first found in the group — so
+  // the lanes and the scalar search give the same map.
   tbb::parallel_for(
-      tbb::blocked_range<int>(0, grid.rows, 1),
+      tbb::blocked_range<int>(0, grid.rows, std::max(1, 256 / std::max(grid.cols, 1))),
       [&](const tbb::blocked_range<int>& rows) {
         CellResult res[kLanes];
         for (int r = rows.begin(); r != rows.end(); ++r) {
           int hint = -1;
           for (int c0 = 0; c0 < grid.cols; c0 += kLanes) {
             const int n = std::min(kLanes, grid.cols - c0);
-            const unsigned done = lanes && hint >= 0 ? mapLanes(grid, r, c0, n, hint, res) : 0u;
+            const auto scalarCell = [&](int k, int* h) {
+              const Eigen::Vector2d xy = grid.center(r, c0 + k);
+              const LocusHit hit = intersect(Eigen::Vector3d(xy.x(), xy.y(), 0.0), v, h);
+              res[k] = {hit.state, float(hit.point.z()), float(hit.sigma), hit.bracket_row};
+            };
+            // Without a hint (the row's start, or nothing found yet), one cell at a time until
+            // one finds a bracket; the rest of the group starts from it.
+            int j = 0;
+            for (; hint < 0 && j < n; ++j) scalarCell(j, &hint);
+            const unsigned done = lanes && j < n ? mapLanes(grid, r, c0 + j, n - j, hint, res + j) : 0u;
             if (done) by_lanes += __builtin_popcount(done);
             int next = hint;
             for (int k = 0; k < n; ++k) {
-              if (!(done >> k & 1u)) {
-                const Eigen::Vector2d xy = grid.center(r, c0 + k);
+              if (k >= j && !(done >> (k - j) & 1u)) {
                 int h = hint;
-                const LocusHit hit = intersect(Eigen::Vector3d(xy.x(), xy.y(), 0.0), v, &h);
-                res[k] = {hit.state, float(hit.point.z()), float(hit.sigma), hit.bracket_row};
+                scalarCell(k, &h);
               }
               if (res[k].state == CellState::Known) out.setKnown(r, c0 + k, res[k].z, res[k].sigma);
               else out.setUnknown(r, c0 + k, res[k].state);
