@@ -523,6 +523,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
       tbb::blocked_range<int>(0, grid.rows, std::max(1, 256 / std::max(grid.cols, 1))),
       [&](const tbb::blocked_range<int>& rows) {
         CellResult res[kLanes];
+        long task_lane_cells = 0;  // added to the total once per task: a shared counter per group would bounce between cores
         for (int r = rows.begin(); r != rows.end(); ++r) {
           int hint = -1;
           for (int c0 = 0; c0 < grid.cols; c0 += kLanes) {
@@ -537,7 +538,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
             int j = 0;
             for (; hint < 0 && j < n; ++j) scalarCell(j, &hint);
             const unsigned done = lanes && j < n ? mapLanes(grid, r, c0 + j, n - j, hint, res + j) : 0u;
-            if (done) by_lanes += __builtin_popcount(done);
+            task_lane_cells += __builtin_popcount(done);
             int next = hint;
             for (int k = 0; k < n; ++k) {
               if (k >= j && !(done >> (k - j) & 1u)) {
@@ -551,6 +552,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
             hint = next;
           }
         }
+        if (task_lane_cells) by_lanes += task_lane_cells;
       },
       tbb::simple_partitioner());
   if (lane_cells) *lane_cells = by_lanes;
