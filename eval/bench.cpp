@@ -208,11 +208,13 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   const perception::EdgeMask edges = perception::detectRangeEdges(image);
   const double edges_ms = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_edges).count() * 1e3;
 
-  nlohmann::ordered_json j, one, all, speedup, cart, scalar_one, lanes;
-  std::printf("ambler bench map (medians of %d; region x [-5, 5] m, y [-3, 8] m; 64x256 scan; AVX-512 lanes %s)\n",
-              opt.repetitions, perception::LocusMapper::lanesAvailable() ? "on" : "not available");
-  std::printf("  %-8s %10s %14s %14s %10s %16s %16s %8s\n", "cell", "cells", "locus 1t ns", "locus all ns", "speedup",
-              "cartesian 1t ns", "scalar 1t ns", "lanes");
+  nlohmann::ordered_json j, one, all, speedup, cart, scalar_one, avx2_one, lanes;
+  const perception::LaneIsa isa = perception::LocusMapper::laneIsa();
+  const char* isa_name = isa == perception::LaneIsa::Avx512 ? "AVX-512" : isa == perception::LaneIsa::Avx2 ? "AVX2" : "none";
+  std::printf("ambler bench map (medians of %d; region x [-5, 5] m, y [-3, 8] m; 64x256 scan; lanes: %s)\n",
+              opt.repetitions, isa_name);
+  std::printf("  %-8s %10s %14s %14s %10s %16s %16s %14s %8s\n", "cell", "cells", "locus 1t ns", "locus all ns",
+              "speedup", "cartesian 1t ns", "scalar 1t ns", "AVX2 1t ns", "lanes");
   for (double cell : {0.02, 0.05, 0.10, 0.20}) {
     MapSpec spec;
     spec.cell_m = cell;
@@ -222,12 +224,17 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
     scalar_config.vectorized = false;
     const perception::LocusMapper scalar(image, &edges, scalar_config);
     const double cells = double(grid.cells());
-    double t1 = 0, tc = 0, ts = 0;
+    double t1 = 0, tc = 0, ts = 0, t2 = 0;
     long lane_cells = 0;
     {
       tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
       t1 = timeMedian(opt.repetitions, [&] { mapper.map(grid, &lane_cells); });
       ts = timeMedian(opt.repetitions, [&] { scalar.map(grid); });
+      if (isa == perception::LaneIsa::Avx512) {  // what a CPU with AVX2 but no AVX-512 would run
+        perception::LocusMapper::capLaneIsa(perception::LaneIsa::Avx2);
+        t2 = timeMedian(opt.repetitions, [&] { mapper.map(grid); });
+        perception::LocusMapper::capLaneIsa(perception::LaneIsa::Avx512);
+      }
       tc = timeMedian(opt.repetitions, [&] { buildCartesianMap(image, spec, perception::GapFill::Linear); });
     }
     const double ta = timeMedian(opt.repetitions, [&] { mapper.map(grid); });
@@ -238,9 +245,11 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
     speedup[key] = t1 / ta;
     cart[key] = tc / cells * 1e9;
     scalar_one[key] = ts / cells * 1e9;
+    if (t2 > 0) avx2_one[key] = t2 / cells * 1e9;
     lanes[key] = double(lane_cells) / cells;
-    std::printf("  %-8.2f %10.0f %14.1f %14.1f %9.2fx %16.1f %16.1f %7.0f%%\n", cell, cells, t1 / cells * 1e9,
-                ta / cells * 1e9, t1 / ta, tc / cells * 1e9, ts / cells * 1e9, 100.0 * lane_cells / cells);
+    std::printf("  %-8.2f %10.0f %14.1f %14.1f %9.2fx %16.1f %16.1f %14.1f %7.0f%%\n", cell, cells, t1 / cells * 1e9,
+                ta / cells * 1e9, t1 / ta, tc / cells * 1e9, ts / cells * 1e9, t2 / cells * 1e9,
+                100.0 * lane_cells / cells);
   }
   // Per image: the mapper's tables (returns, edge pixels and σ inputs per 2×2 cell), one thread.
   double setup_s = 0;
@@ -255,7 +264,9 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   j["speedup_all"] = speedup;
   j["cartesian_ns_per_cell_1t"] = cart;
   j["scalar_ns_per_cell_1t"] = scalar_one;  // the same maps without the AVX-512 lanes
+  if (!avx2_one.empty()) j["avx2_ns_per_cell_1t"] = avx2_one;  // the lanes capped at AVX2
   j["lane_fraction"] = lanes;               // of all cells, those the lanes completed
+  j["lanes"] = isa_name;
   j["edges_ms"] = edges_ms;
   j["locus_setup_ms"] = setup_s * 1e3;
   j["threads"] = tbb::info::default_concurrency();

@@ -510,7 +510,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
   ElevationMap out(grid);
   std::atomic<long> by_lanes{0};
   const Eigen::Vector3d v = Eigen::Vector3d::UnitZ();
-  const bool lanes = config_.vectorized && lanesAvailable();
+  const LaneIsa isa = config_.vectorized ? laneIsa() : LaneIsa::None;
   // Tasks of whole map rows, about 256 cells each: rows cost very different amounts (unseen rows
   // are cheap), small tasks keep both cores busy to the end, and tasks much smaller than that
   // cost more to hand out than they take (10 cm cells: 2-core speedup 1.73-1.91 with one row per
@@ -537,7 +537,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
             // one finds a bracket; the rest of the group starts from it.
             int j = 0;
             for (; hint < 0 && j < n; ++j) scalarCell(j, &hint);
-            const unsigned done = lanes && j < n ? mapLanes(grid, r, c0 + j, n - j, hint, res + j) : 0u;
+            const unsigned done = isa != LaneIsa::None && j < n ? mapLanes(isa, grid, r, c0 + j, n - j, hint, res + j) : 0u;
             task_lane_cells += __builtin_popcount(done);
             int next = hint;
             for (int k = 0; k < n; ++k) {

@@ -25,8 +25,8 @@ struct LocusConfig {
   double z_margin_m = 1.0;    // lines are searched within the returns' bounds ± this margin
   bool roughness = true;      // σ includes the surface's roughness between pixels (docs/locus.md)
   double roughness_hurst = 0.7;  // H of the fBm assumed between pixels (0.5: Brownian)
-  bool vectorized = true;  // maps: the common case 8 cells at a time in AVX-512 where the CPU has
-                           // it (the same bits as the scalar search; false: scalar only)
+  bool vectorized = true;  // maps: the common case in SIMD lanes (8 AVX-512 or 2 × 4 AVX2) where
+                           // the CPU has them (the same bits as the scalar search; false: scalar)
 };
 
 struct LocusHit {
@@ -40,6 +40,9 @@ struct LocusHit {
 };
 
 struct LocusSample;
+
+// The SIMD lanes maps run their common case in (LocusMapper::laneIsa).
+enum class LaneIsa { None = 0, Avx2 = 1, Avx512 = 2 };
 
 class LocusMapper {
  public:
@@ -64,9 +67,12 @@ class LocusMapper {
   // lane_cells, if given, receives how many cells the AVX-512 lanes completed.
   ElevationMap map(const MapGrid& grid, long* lane_cells = nullptr) const;
 
-  static constexpr int kLanes = 8;  // map cells per group (and per AVX-512 batch)
-  // Whether this process runs the AVX-512 lanes (the CPU and OS support AVX-512F/DQ).
-  static bool lanesAvailable();
+  static constexpr int kLanes = 8;  // map cells per group (one AVX-512 batch, or two AVX2 ones)
+  // The lanes this process runs: AVX-512 (F and DQ) where the CPU and OS support it, else AVX2,
+  // else none — at most the cap (for tests: the results are the same bits at every setting).
+  static LaneIsa laneIsa();
+  static void capLaneIsa(LaneIsa cap);
+  static bool lanesAvailable() { return laneIsa() != LaneIsa::None; }
 
   // The map at resolution `cell_m` inside a polygon (x, y vertices, world frame): the grid covers
   // the polygon's bounding box; cells whose centre is outside the polygon stay Unseen.
@@ -142,7 +148,7 @@ class LocusMapper {
   // closes it, no edge or missing pixel in the final 2×2 cell), in AVX-512 with the scalar
   // search's operations: bit k of the result is set where lane k finished into out[k]
   // (locus_lanes.cpp).
-  unsigned mapLanes(const MapGrid& grid, int row, int c0, int n, int hint, CellResult* out) const;
+  unsigned mapLanes(LaneIsa isa, const MapGrid& grid, int row, int c0, int n, int hint, CellResult* out) const;
   LocusSample atRow(const Line& l, int r) const;
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;
   double sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,

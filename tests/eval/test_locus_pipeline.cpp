@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <memory>
 #include <numbers>
+#include <string>
 
 #include "eval/map_metrics.hpp"
 #include "eval/mapping.hpp"
@@ -183,11 +184,11 @@ TEST(LocusPipeline, SigmaMatchesMonteCarloSpread) {
   RecordProperty("spread_over_sigma", std::to_string(ratio));
 }
 
-// The AVX-512 lanes (perception/locus_lanes.cpp) repeat the scalar search's operations, so a map
+// The SIMD lanes (perception/locus_lanes.cpp) repeat the scalar search's operations, so a map
 // built with them is the scalar map bit for bit: on Mars-like terrain (rocks, craters, noise,
 // quantisation, mixed pixels, GNC edges) from a level and a rolled, yawed sensor, at four cell
-// sizes. Where the CPU has AVX-512, the lanes must also have done most of the known cells (else
-// this would compare the scalar search with itself).
+// sizes, with the AVX-512 lanes and with the AVX2 ones, as far as the CPU has them. The lanes must
+// also have done most of the known cells (else this would compare the scalar search with itself).
 TEST(LocusPipeline, LanesGiveTheScalarSearchsBits) {
   terrains::TerrainSpec mars;
   mars.kind = terrains::TerrainKind::Mars;
@@ -203,31 +204,35 @@ TEST(LocusPipeline, LanesGiveTheScalarSearchsBits) {
     perception::LocusConfig lanes = locusConfig(spec, sensor), scalar = lanes;
     scalar.vectorized = false;
     const perception::LocusMapper fast(image, &edges, lanes), slow(image, &edges, scalar);
-    for (const double cell : {0.02, 0.05, 0.10, 0.20}) {
-      spec.cell_m = cell;
-      const auto grid = mapGrid(spec);
-      long by_lanes = -1;
-      const auto a = fast.map(grid, &by_lanes), b = slow.map(grid);
-      long known = 0, differ = 0;
-      for (int r = 0; r < grid.rows; ++r)
-        for (int c = 0; c < grid.cols; ++c) {
-          const float za = a.elevation()(r, c), zb = b.elevation()(r, c);
-          const float sa = a.sigma()(r, c), sb = b.sigma()(r, c);
-          const bool same = a.stateAt(r, c) == b.stateAt(r, c) && std::memcmp(&za, &zb, sizeof za) == 0 &&
-                            std::memcmp(&sa, &sb, sizeof sa) == 0;
-          differ += !same;
-          known += a.stateAt(r, c) == perception::CellState::Known;
-        }
-      EXPECT_EQ(differ, 0) << "cell " << cell << " m";
-      EXPECT_GT(known, grid.cells() / 3) << "cell " << cell << " m";
-      if (perception::LocusMapper::lanesAvailable()) EXPECT_GT(by_lanes, known / 2) << "cell " << cell << " m";
-      else EXPECT_EQ(by_lanes, 0);
+    for (const auto isa : {perception::LaneIsa::Avx512, perception::LaneIsa::Avx2}) {
+      perception::LocusMapper::capLaneIsa(isa);
+      const auto active = perception::LocusMapper::laneIsa();
+      for (const double cell : {0.02, 0.05, 0.10, 0.20}) {
+        spec.cell_m = cell;
+        const auto grid = mapGrid(spec);
+        long by_lanes = -1;
+        const auto a = fast.map(grid, &by_lanes), b = slow.map(grid);
+        long known = 0, differ = 0;
+        for (int r = 0; r < grid.rows; ++r)
+          for (int c = 0; c < grid.cols; ++c) {
+            const float za = a.elevation()(r, c), zb = b.elevation()(r, c);
+            const float sa = a.sigma()(r, c), sb = b.sigma()(r, c);
+            const bool same = a.stateAt(r, c) == b.stateAt(r, c) && std::memcmp(&za, &zb, sizeof za) == 0 &&
+                              std::memcmp(&sa, &sb, sizeof sa) == 0;
+            differ += !same;
+            known += a.stateAt(r, c) == perception::CellState::Known;
+          }
+        const std::string what = "cell " + std::to_string(cell) + " m, lanes " + std::to_string(int(active));
+        EXPECT_EQ(differ, 0) << what;
+        EXPECT_GT(known, grid.cells() / 3) << what;
+        if (active != perception::LaneIsa::None) EXPECT_GT(by_lanes, known / 2) << what;
+        else EXPECT_EQ(by_lanes, 0) << what;
+      }
     }
+    perception::LocusMapper::capLaneIsa(perception::LaneIsa::Avx512);
   }
 }
 
-// A far field beyond the 19.5 m ambiguity interval is unwrapped and mapped right, or left
-// unknown — never mapped at the wrapped range (which would be metres off).
 TEST(LocusPipeline, WrappedFarFieldIsUnwrappedOrUnknown) {
   terrains::TerrainSpec flat;
   flat.kind = terrains::TerrainKind::Fractal;
