@@ -23,6 +23,12 @@ namespace {
 // The part [s0, s1] of the line u + s·v inside `box` (slab method); false if it misses.
 bool clipToBox(const Eigen::AlignedBox3d& box, const Eigen::Vector3d& u, const Eigen::Vector3d& v,
                double& s0, double& s1) {
+  if (v.x() == 0.0 && v.y() == 0.0 && v.z() == 1.0) {  // a map's vertical line: the loop below, unrolled
+    if (u.x() < box.min().x() || u.x() > box.max().x() || u.y() < box.min().y() || u.y() > box.max().y()) return false;
+    s0 = box.min().z() - u.z();  // (min − u)/1: the same bits
+    s1 = box.max().z() - u.z();
+    return s0 <= s1;
+  }
   s0 = -std::numeric_limits<double>::infinity();
   s1 = std::numeric_limits<double>::infinity();
   for (int i = 0; i < 3; ++i) {
@@ -182,10 +188,17 @@ Sample LocusMapper::atPhi(const Line& l, int r_ref, double phi) const {
 LocusMapper::Line LocusMapper::lineOf(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const {
   const bool vertical = v.x() == 0.0 && v.y() == 0.0 && v.z() == 1.0;
   const Eigen::Matrix3d& R = rot_SW_;
+  const double ux = u.x(), uy = u.y(), uz = u.z();
   Line l;
-  for (int i = 0; i < 3; ++i) {
-    l.a[i] = ((R(i, 0) * u.x() + R(i, 1) * u.y()) + R(i, 2) * u.z()) + trans_SW_[i];
-    l.b[i] = (R(i, 0) * v.x() + R(i, 1) * v.y()) + R(i, 2) * v.z();
+  l.a = Eigen::Vector3d(((R(0, 0) * ux + R(0, 1) * uy) + R(0, 2) * uz) + trans_SW_.x(),
+                        ((R(1, 0) * ux + R(1, 1) * uy) + R(1, 2) * uz) + trans_SW_.y(),
+                        ((R(2, 0) * ux + R(2, 1) * uy) + R(2, 2) * uz) + trans_SW_.z());
+  if (vertical) {
+    l.b = up_;  // the same sums for v = (0, 0, 1): the constructor made up_ with this function
+  } else {
+    const double vx = v.x(), vy = v.y(), vz = v.z();
+    l.b = Eigen::Vector3d((R(0, 0) * vx + R(0, 1) * vy) + R(0, 2) * vz, (R(1, 0) * vx + R(1, 1) * vy) + R(1, 2) * vz,
+                          (R(2, 0) * vx + R(2, 1) * vy) + R(2, 2) * vz);
   }
   l.inv_den = vertical ? vertical_inv_den_.data() : nullptr;
   return l;

@@ -130,7 +130,8 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
     throw std::invalid_argument("LocusMapper: scan angles must be evenly spaced, φ falling, θ rising");
   rot_SW_ = T_SW_.linear();
   trans_SW_ = T_SW_.translation();
-  up_ = lineOf(Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()).b;  // world z in the sensor frame
+  // World z in the sensor frame, summed as lineOf sums R·v (lineOf returns it for vertical lines).
+  for (int i = 0; i < 3; ++i) up_[i] = (rot_SW_(i, 0) * 0.0 + rot_SW_(i, 1) * 0.0) + rot_SW_(i, 2) * 1.0;
   // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1]; g is smooth).
   const double h2 = 2 * config.roughness_hurst;
   for (int i = 0; i <= kRoughnessSteps; ++i) {
