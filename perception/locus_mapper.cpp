@@ -424,7 +424,7 @@ double LocusMapper::slopeInPatch(const Line& l, int r1, double phi_m, int r_m, c
   const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + c_cell;
   const double p00 = px[0], p01 = px[1], p10 = px[cols_], p11 = px[cols_ + 1];
   const double fr = r_m >= 0 ? double(r_m - r_cell) : (phi0_ - phi_m) * inv_dphi_ - r_cell;
-  const double fc = r_m >= 0 && m.c0 == c_cell ? m.fc : m.cf - c_cell;
+  const double fc = m.cf - c_cell;  // = m.fc where m is in that cell
   const double top = (1 - fc) * p00 + fc * p01, bottom = (1 - fc) * p10 + fc * p11;
   return slope(l, sp, cp, inv_den, m, bottom - top, (1 - fr) * (p01 - p00) + fr * (p11 - p10));
 }
@@ -536,7 +536,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
       tbb::blocked_range<int>(0, grid.rows, std::max(1, 256 / std::max(grid.cols, 1))),
       [&](const tbb::blocked_range<int>& rows) {
         CellResult res[kLanes];
-        long task_lane_cells = 0;  // added to the total once per task: a shared counter per group would bounce between cores
+        long task_lane_cells = 0;  // added to the total once per task: a shared counter would bounce
         for (int r = rows.begin(); r != rows.end(); ++r) {
           int hint = -1;
           for (int c0 = 0; c0 < grid.cols; c0 += kLanes) {
