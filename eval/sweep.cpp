@@ -1,34 +1,26 @@
 // Sweeps: axes of values at dotted key paths into a base scenario's YAML; every combination is
-// written back as YAML and read by the strict scenario reader before anything runs. Rows are
-// assembled in run order whatever the number of jobs, so results.csv is byte-identical however it
-// was produced (one process, several jobs, or shards merged). docs/sweeps.md is the schema.
+// written back as YAML and read by the strict scenario reader before anything runs.
+// docs/sweeps.md is the schema. Running and sharding are in sweep_run.cpp; results.csv and
+// merging shards in sweep_results.cpp.
 #include "eval/sweep.hpp"
 
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
-#include <atomic>
 #include <charconv>
-#include <cmath>
-#include <cstdio>
 #include <fstream>
-#include <mutex>
-#include <nlohmann/json.hpp>
-#include <optional>
-#include <regex>
 #include <sstream>
 #include <string_view>
-#include <thread>
 #include <unordered_map>
 #include <utility>
 
-#include "eval/io.hpp"
-#include "eval/runner.hpp"
+#include "eval/sweep_internal.hpp"
 
 namespace ambler::eval {
 namespace {
 
 namespace fs = std::filesystem;
+using namespace sweep_detail;
 
 // Bounds the product so a typo cannot start validating (and storing, ~3 kB each) millions of
 // scenarios; a bigger study is several sweep files.
@@ -120,7 +112,11 @@ std::string emitYaml(const YAML::Node& root) {
   return out;
 }
 
+}  // namespace
+
 // ---- the sweep file ---------------------------------------------------------------------------
+
+namespace sweep_detail {
 
 std::vector<std::string> split(std::string_view text, char sep) {
   std::vector<std::string> out;
@@ -135,6 +131,20 @@ std::vector<std::string> split(std::string_view text, char sep) {
 bool allDigits(std::string_view s) {
   return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
 }
+
+std::string readText(const fs::path& file, const std::string& who) {
+  std::error_code ec;
+  std::ifstream in(file, std::ios::binary);
+  if (!in || fs::is_directory(file, ec)) throw SweepError(who + ": cannot open file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw SweepError(who + ": cannot read file");
+  return text.str();
+}
+
+}  // namespace sweep_detail
+
+namespace {
 
 bool isKeyPath(std::string_view path) {
   const auto segments = split(path, '.');
@@ -152,16 +162,6 @@ std::string readerPath(const std::string& key) {
     out += allDigits(segment) && !out.empty() ? "[" + segment + "]" : (out.empty() ? "" : ".") + segment;
   }
   return out;
-}
-
-std::string readText(const fs::path& file, const std::string& who) {
-  std::error_code ec;
-  std::ifstream in(file, std::ios::binary);
-  if (!in || fs::is_directory(file, ec)) throw SweepError(who + ": cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw SweepError(who + ": cannot read file");
-  return text.str();
 }
 
 class SweepReader {
@@ -419,179 +419,6 @@ class SweepReader {
   std::vector<std::vector<YAML::Node>> values_;  // per axis, its values as YAML
 };
 
-// ---- results ----------------------------------------------------------------------------------
-
-using Row = std::vector<std::pair<std::string, std::string>>;  // column, cell text
-
-std::string numberText(double v) {
-  if (!std::isfinite(v)) return "";  // as in metrics.json, where a non-finite number is null
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-}
-
-// The scalar leaves of metrics.json in document order, arrays by index: map.0.rms_error_m.
-void flatten(const nlohmann::ordered_json& j, const std::string& path, bool timing, Row& out) {
-  if (j.is_object() || j.is_array()) {
-    std::size_t i = 0;
-    for (auto it = j.begin(); it != j.end(); ++it, ++i) {
-      const std::string key = j.is_object() ? it.key() : std::to_string(i);
-      if (path.empty() && key == "timing_s" && !timing) continue;
-      flatten(*it, path.empty() ? key : path + "." + key, timing, out);
-    }
-    return;
-  }
-  std::string text;
-  if (j.is_number_float()) {
-    text = numberText(j.get<double>());
-  } else if (j.is_number_unsigned()) {
-    text = std::to_string(j.get<std::uint64_t>());
-  } else if (j.is_number_integer()) {
-    text = std::to_string(j.get<std::int64_t>());
-  } else if (j.is_boolean()) {
-    text = j.get<bool>() ? "true" : "false";
-  } else if (j.is_string()) {
-    text = j.get<std::string>();
-  }
-  out.emplace_back(path, std::move(text));
-}
-
-std::string csvCell(const std::string& text) {
-  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
-  std::string out = "\"";
-  for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
-
-std::string csvText(const std::vector<std::string>& cells) {
-  std::string out;
-  for (std::size_t i = 0; i < cells.size(); ++i) out += (i ? "," : "") + csvCell(cells[i]);
-  return out;
-}
-
-std::string csvLine(const std::vector<std::string>& cells) { return csvText(cells) + "\n"; }
-
-// RFC 4180 records; nullopt when a quote is left open or stray.
-std::optional<std::vector<std::vector<std::string>>> parseCsv(const std::string& text) {
-  std::vector<std::vector<std::string>> records;
-  std::vector<std::string> record;
-  std::string cell;
-  bool quoted = false, was_quoted = false;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    const char c = text[i];
-    if (quoted) {
-      if (c != '"') {
-        cell += c;
-      } else if (i + 1 < text.size() && text[i + 1] == '"') {
-        cell += '"';
-        ++i;
-      } else {
-        quoted = false;
-      }
-    } else if (c == '"') {
-      if (!cell.empty() || was_quoted) return std::nullopt;
-      quoted = was_quoted = true;
-    } else if (c == ',') {
-      record.push_back(std::move(cell));
-      cell.clear();
-      was_quoted = false;
-    } else if (c == '\n' || c == '\r') {
-      if (c == '\r' && i + 1 < text.size() && text[i + 1] == '\n') ++i;
-      record.push_back(std::move(cell));
-      records.push_back(std::move(record));
-      record.clear();
-      cell.clear();
-      was_quoted = false;
-    } else {
-      if (was_quoted) return std::nullopt;
-      cell += c;
-    }
-  }
-  if (quoted) return std::nullopt;
-  if (!cell.empty() || !record.empty() || was_quoted) {
-    record.push_back(std::move(cell));
-    records.push_back(std::move(record));
-  }
-  return records;
-}
-
-// Metric columns in the order they first appear in run order, a column new in a later run placed
-// after its predecessor in that run, so the columns read as metrics.json does.
-std::vector<std::string> metricColumns(const Sweep& sweep, const std::vector<Row>& rows) {
-  if (!sweep.metrics.empty()) return sweep.metrics;
-  std::vector<std::string> columns;
-  for (const auto& row : rows) {
-    std::size_t at = 0;
-    for (const auto& [name, cell] : row) {
-      const auto it = std::find(columns.begin(), columns.end(), name);
-      if (it == columns.end()) {
-        columns.insert(columns.begin() + std::ptrdiff_t(at), name);
-        ++at;
-      } else {
-        at = std::size_t(it - columns.begin()) + 1;
-      }
-    }
-  }
-  // An axis that is also a metric (seed) is already a column.
-  std::erase_if(columns, [&](const std::string& c) {
-    return c == "run" ||
-           std::any_of(sweep.axes.begin(), sweep.axes.end(), [&](const SweepAxis& a) { return a.key == c; });
-  });
-  return columns;
-}
-
-std::vector<std::string> axisCells(const Sweep& sweep, std::size_t k) {
-  std::vector<std::string> cells{std::to_string(k)};
-  const auto combination = sweep.combination(k);
-  for (std::size_t a = 0; a < sweep.axes.size(); ++a) cells.push_back(sweep.axes[a].cells[combination[a]]);
-  return cells;
-}
-
-std::string shardName(const Shard& s) {
-  return "results.shard-" + std::to_string(s.index) + "-of-" + std::to_string(s.count) + ".csv";
-}
-
-// Keeps what `keep` asks for of a finished run directory.
-void prune(const fs::path& dir, Keep keep) {
-  if (keep == Keep::All) return;
-  if (keep == Keep::None) {
-    fs::remove_all(dir);
-    return;
-  }
-  std::vector<fs::path> bulky;
-  for (const auto& entry : fs::directory_iterator(dir)) {
-    const auto name = entry.path().filename();
-    if (name != "metrics.json" && name != "scenario.resolved.yaml") bulky.push_back(entry.path());
-  }
-  for (const auto& path : bulky) fs::remove_all(path);
-}
-
-std::string progressLine(const Sweep& sweep, std::size_t k, const nlohmann::ordered_json& metrics) {
-  std::string line = "run " + std::to_string(k) + ":";
-  const auto combination = sweep.combination(k);
-  for (std::size_t a = 0; a < sweep.axes.size(); ++a) {
-    line += " " + sweep.axes[a].key + "=" + sweep.axes[a].cells[combination[a]];
-  }
-  const auto first = [&](const char* section, const char* key) -> std::optional<double> {
-    if (!metrics.contains(section) || metrics[section].empty()) return std::nullopt;
-    const auto& v = metrics[section][0];
-    if (!v.contains(key) || !v[key].is_number()) return std::nullopt;
-    return v[key].get<double>();
-  };
-  char buf[64];
-  if (const auto rms = first("map", "rms_error_m")) {
-    std::snprintf(buf, sizeof buf, " rms=%.4g m", *rms);
-    line += buf;
-  } else if (const auto range = first("scan", "range_error_rms_m")) {
-    std::snprintf(buf, sizeof buf, " range_rms=%.4g m", *range);
-    line += buf;
-  }
-  if (const auto cartesian = first("map_cartesian", "rms_error_m")) {
-    std::snprintf(buf, sizeof buf, " cartesian_rms=%.4g m", *cartesian);
-    line += buf;
-  }
-  return line;
-}
-
 }  // namespace
 
 std::vector<std::size_t> Sweep::combination(std::size_t k) const {
@@ -608,223 +435,5 @@ Sweep parseSweep(const std::string& yaml_text, const fs::path& file) {
 }
 
 Sweep loadSweep(const fs::path& file) { return parseSweep(readText(file, file.string()), file); }
-
-std::optional<std::vector<std::vector<std::string>>> parseResultsCsv(const std::string& text) {
-  return parseCsv(text);
-}
-
-Shard parseShard(const std::string& text) {
-  const auto parts = split(text, '/');
-  Shard s;
-  const auto parse = [](const std::string& p, int& v) {
-    return allDigits(p) && p.size() <= 9 &&
-           std::from_chars(p.data(), p.data() + p.size(), v).ec == std::errc();
-  };
-  if (parts.size() != 2 || !parse(parts[0], s.index) || !parse(parts[1], s.count) || s.index < 1 ||
-      s.index > s.count) {
-    throw SweepError("--shard: expected K/N with 1 <= K <= N (shard K of N, 1-based), got " +
-                     yamlQuoted(text));
-  }
-  return s;
-}
-
-Keep parseKeep(const std::string& text) {
-  if (text == "none") return Keep::None;
-  if (text == "metrics") return Keep::Metrics;
-  if (text == "all") return Keep::All;
-  throw SweepError("--keep: expected one of none, metrics, all, got " + yamlQuoted(text));
-}
-
-fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
-  if (opt.jobs < 1) throw SweepError("--jobs: expected an integer >= 1, got " + std::to_string(opt.jobs));
-  const std::size_t total = sweep.runs.size();
-  if (opt.shard && std::size_t(opt.shard->count) > total) {
-    throw SweepError("--shard: " + std::to_string(opt.shard->index) + "/" + std::to_string(opt.shard->count) +
-                     ": the sweep has " + std::to_string(total) + " runs, so at most " +
-                     std::to_string(total) + " shards");
-  }
-  std::vector<std::size_t> todo;
-  for (std::size_t k = 0; k < total; ++k) {
-    if (!opt.shard || k % std::size_t(opt.shard->count) == std::size_t(opt.shard->index - 1))
-      todo.push_back(k);
-  }
-  const fs::path csv = opt.out / (opt.shard ? shardName(*opt.shard) : "results.csv");
-  const std::size_t jobs = std::min<std::size_t>(std::size_t(opt.jobs), todo.size());
-
-  std::mutex mutex;  // guards stderr, `done` and the first error
-  const auto say = [&](const std::string& line) {
-    if (opt.progress) std::fprintf(stderr, "ambler: %s\n", line.c_str());
-  };
-  say("sweep " + sweep.name + ": " + std::to_string(todo.size()) + " of " + std::to_string(total) + " runs" +
-      (opt.shard
-           ? " (shard " + std::to_string(opt.shard->index) + " of " + std::to_string(opt.shard->count) + ")"
-           : "") +
-      ", " + std::to_string(jobs) + (jobs == 1 ? " job" : " jobs") + " -> " + opt.out.string());
-  fs::create_directories(opt.out / "runs");
-
-  std::vector<Row> rows(todo.size());
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> stop{false};
-  std::size_t done = 0;
-  std::optional<std::pair<std::size_t, std::string>> error;  // the failed run of lowest index
-  const auto work = [&] {
-    for (std::size_t i; !stop && (i = next++) < todo.size();) {
-      const std::size_t k = todo[i];
-      try {
-        const fs::path dir = opt.out / "runs" / std::to_string(k);
-        fs::remove_all(dir);  // no files of an earlier sweep left beside this run's
-        const auto metrics = runScenario(sweep.runs[k], RunOptions{dir, false});
-        flatten(metrics, "", opt.timing, rows[i]);
-        prune(dir, opt.keep);
-        const std::lock_guard lock(mutex);
-        ++done;
-        say("[" + std::to_string(done) + "/" + std::to_string(todo.size()) + "] " +
-            progressLine(sweep, k, metrics));
-      } catch (const std::exception& e) {
-        stop = true;
-        const std::lock_guard lock(mutex);
-        if (!error || k < error->first) error.emplace(k, e.what());
-      }
-    }
-  };
-  if (jobs <= 1) {
-    work();
-  } else {
-    std::vector<std::jthread> threads;
-    for (std::size_t j = 0; j < jobs; ++j) threads.emplace_back(work);
-  }
-  if (error) {
-    std::string values;
-    const auto combination = sweep.combination(error->first);
-    for (std::size_t a = 0; a < sweep.axes.size(); ++a) {
-      values += (a ? ", " : "") + sweep.axes[a].key + " = " + sweep.axes[a].values[combination[a]];
-    }
-    throw SweepError(sweep.file.string() + ": run " + std::to_string(error->first) + " (" + values +
-                     "): " + error->second);
-  }
-  if (opt.keep == Keep::None) {
-    std::error_code ec;
-    fs::remove(opt.out / "runs", ec);  // only if empty
-  }
-
-  const auto columns = metricColumns(sweep, rows);
-  std::vector<std::string> header{"run"};
-  for (const auto& axis : sweep.axes) header.push_back(axis.key);
-  header.insert(header.end(), columns.begin(), columns.end());
-  std::string text = csvLine(header);
-  for (std::size_t i = 0; i < todo.size(); ++i) {
-    std::unordered_map<std::string, std::string> cells(rows[i].begin(), rows[i].end());
-    auto line = axisCells(sweep, todo[i]);
-    for (const auto& column : columns) line.push_back(cells.count(column) ? cells[column] : "");
-    text += csvLine(line);
-  }
-  writeText(csv, text);
-  say("wrote " + csv.string() + " (" + std::to_string(todo.size()) + " rows, " +
-      std::to_string(header.size()) + " columns)");
-  return csv;
-}
-
-fs::path mergeSweep(const Sweep& sweep, const fs::path& out, bool progress) {
-  const std::string where = out.string();
-  std::error_code ec;
-  if (!fs::is_directory(out, ec)) throw SweepError(where + ": no such directory");
-  const std::regex pattern(R"(results\.shard-([0-9]{1,9})-of-([0-9]{1,9})\.csv)");
-  std::vector<std::pair<Shard, fs::path>> files;
-  for (const auto& entry : fs::directory_iterator(out)) {
-    std::smatch m;
-    const std::string name = entry.path().filename().string();
-    if (!std::regex_match(name, m, pattern)) continue;
-    files.emplace_back(Shard{std::stoi(m[1]), std::stoi(m[2])}, entry.path());
-  }
-  if (files.empty()) throw SweepError(where + ": no results.shard-K-of-N.csv files to merge");
-  std::sort(files.begin(), files.end(), [](const auto& a, const auto& b) {
-    return std::pair(a.first.count, a.first.index) < std::pair(b.first.count, b.first.index);
-  });
-  const int n = files.front().first.count;
-  if (files.back().first.count != n) {
-    throw SweepError(where + ": shards of different splits (" + files.front().second.filename().string() +
-                     ", " + files.back().second.filename().string() + "): remove the stale ones");
-  }
-  for (const auto& [shard, path] : files) {
-    if (shard.index < 1 || shard.index > n)
-      throw SweepError(path.string() + ": no shard " + std::to_string(shard.index) + " of " +
-                       std::to_string(n));
-  }
-  for (int k = 1; k <= n; ++k) {
-    if (std::none_of(files.begin(), files.end(), [&](const auto& f) { return f.first.index == k; })) {
-      throw SweepError((out / shardName(Shard{k, n})).string() + ": missing (shard " + std::to_string(k) +
-                       " of " + std::to_string(n) + ")");
-    }
-  }
-
-  const std::size_t total = sweep.runs.size();
-  std::vector<std::string> axes_header{"run"};
-  for (const auto& axis : sweep.axes) axes_header.push_back(axis.key);
-  std::vector<std::string> header;
-  fs::path header_file;
-  std::vector<std::optional<std::vector<std::string>>> rows(total);
-  std::vector<fs::path> row_file(total);
-  for (const auto& [shard, path] : files) {
-    const std::string name = path.string();
-    const auto records = parseCsv(readText(path, name));
-    if (!records) throw SweepError(name + ": not a CSV file (an open or stray quote)");
-    if (records->empty()) throw SweepError(name + ": empty, expected a header row");
-    const auto& head = records->front();
-    if (header_file.empty()) {
-      if (head.size() < axes_header.size() ||
-          !std::equal(axes_header.begin(), axes_header.end(), head.begin())) {
-        throw SweepError(name + ": header does not start with run and the sweep's axes (" +
-                         csvText(axes_header) + ")");
-      }
-      header = head;
-      header_file = path;
-    } else if (head != header) {
-      throw SweepError(name + ": header differs from " + header_file.string() + "'s");
-    }
-    for (std::size_t r = 1; r < records->size(); ++r) {
-      const auto& row = (*records)[r];
-      const std::string at = name + ": row " + std::to_string(r + 1) + ": ";
-      if (row.size() != header.size()) {
-        throw SweepError(at + "expected " + std::to_string(header.size()) + " cells, got " +
-                         std::to_string(row.size()));
-      }
-      std::size_t k = 0;
-      if (!allDigits(row[0]) || row[0].size() > 9 || (k = std::stoul(row[0])) >= total) {
-        throw SweepError(at + "expected a run index in [0, " + std::to_string(total - 1) + "], got " +
-                         yamlQuoted(row[0]));
-      }
-      if (k % std::size_t(n) != std::size_t(shard.index - 1)) {
-        throw SweepError(at + "run " + std::to_string(k) + " belongs to shard " + std::to_string(k % n + 1) +
-                         " of " + std::to_string(n));
-      }
-      if (rows[k])
-        throw SweepError(at + "run " + std::to_string(k) + " is duplicated (also in " + row_file[k].string() +
-                         ")");
-      const auto expected = axisCells(sweep, k);
-      if (!std::equal(expected.begin(), expected.end(), row.begin())) {
-        throw SweepError(at + "run " + std::to_string(k) + ": cells " +
-                         csvText({row.begin(), row.begin() + std::ptrdiff_t(expected.size())}) +
-                         " differ from the sweep file's " + csvText(expected) +
-                         " (was it edited after the shards ran?)");
-      }
-      rows[k] = row;
-      row_file[k] = path;
-    }
-  }
-  for (std::size_t k = 0; k < total; ++k) {
-    if (!rows[k]) {
-      throw SweepError(where + ": run " + std::to_string(k) + " is missing (expected in " +
-                       shardName(Shard{int(k % std::size_t(n)) + 1, n}) + ")");
-    }
-  }
-  std::string text = csvLine(header);
-  for (const auto& row : rows) text += csvLine(*row);
-  const fs::path csv = out / "results.csv";
-  writeText(csv, text);
-  if (progress) {
-    std::fprintf(stderr, "ambler: merged %d shards into %s (%zu rows)\n", n, csv.string().c_str(), total);
-  }
-  return csv;
-}
 
 }  // namespace ambler::eval
