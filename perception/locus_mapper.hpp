@@ -64,7 +64,7 @@ class LocusMapper {
   // A map on `grid`: vertical lines through the cell centres, in parallel over rows. Each group of
   // kLanes cells of a map row starts its scanline search at the last bracket found in the groups
   // before it (docs/locus.md); the map does not depend on the ISA or the number of threads.
-  // lane_cells, if given, receives how many cells the AVX-512 lanes completed.
+  // lane_cells, if given, receives how many cells the SIMD lanes completed.
   ElevationMap map(const MapGrid& grid, long* lane_cells = nullptr) const;
 
   static constexpr int kLanes = 8;  // map cells per group (one AVX-512 batch, or two AVX2 ones)
@@ -145,8 +145,8 @@ class LocusMapper {
   };
   // The cells (row, c0 + k), k < n ≤ kLanes, of `grid` whose search from `hint` takes the common path
   // (a bracket within a few scanlines of the hint, the Hermite estimate, a probe pair that
-  // closes it, no edge or missing pixel in the final 2×2 cell), in AVX-512 with the scalar
-  // search's operations: bit k of the result is set where lane k finished into out[k]
+  // closes it, no edge or missing pixel in the final 2×2 cell), in the SIMD lanes of `isa` with
+  // the scalar search's operations: bit k of the result is set where lane k finished into out[k]
   // (locus_lanes.cpp).
   unsigned mapLanes(LaneIsa isa, const MapGrid& grid, int row, int c0, int n, int hint, CellResult* out) const;
   LocusSample atRow(const Line& l, int r) const;
@@ -166,9 +166,8 @@ class LocusMapper {
   const RangeImage& image_;
   const EdgeMask* edges_;
   LocusConfig config_;
-  Eigen::Isometry3d T_SW_;
-  Eigen::Matrix3d rot_SW_;
-  Eigen::Vector3d trans_SW_;
+  Eigen::Matrix3d rot_SW_;    // T_SW = T_WS⁻¹: rotation
+  Eigen::Vector3d trans_SW_;  // and translation
   Eigen::Vector3d up_;  // world z in the sensor frame
   int rows_, cols_;
   std::vector<double> roughness_g_;  // the fBm interpolation factor, tabulated over f

@@ -22,12 +22,12 @@ namespace locus {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::uint8_t kAllReturned = 16;
-constexpr int kRoughnessSteps = 1024;
+constexpr int kRoughnessSteps = 1024;  // intervals of the tabulated fBm interpolation factor
 // 1/n! factors of sinCosNear's Taylor series (multiplications: a division costs several).
 constexpr double kInv6 = 1.0 / 6, kInv12 = 1.0 / 12, kInv20 = 1.0 / 20, kInv30 = 1.0 / 30;
 // Scanlines the search walks from a neighbouring cell's bracket (the hint) before it walks down the
 // line from its top instead.
-constexpr int kHintSteps = 3;  // intervals of the tabulated fBm interpolation factor
+constexpr int kHintSteps = 3;
 
 }  // namespace locus
 

@@ -116,7 +116,7 @@ inline double roughnessVariance(double mean_d2, double f, double var_pixel, cons
 }  // namespace
 
 LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const LocusConfig& config)
-    : image_(image), edges_(edges), config_(config), T_SW_(image.T_WS.inverse()), rows_(image.rows()),
+    : image_(image), edges_(edges), config_(config), rows_(image.rows()),
       cols_(image.cols()) {
   if (rows_ < 2 || cols_ < 2)
     throw std::invalid_argument("LocusMapper: the range image needs at least 2x2 pixels");
@@ -128,8 +128,9 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   dtheta_ = image.theta[1] - image.theta[0];
   if (!(dphi_ > 0) || !(dtheta_ > 0) || !checkEven(image.phi, -dphi_) || !checkEven(image.theta, dtheta_))
     throw std::invalid_argument("LocusMapper: scan angles must be evenly spaced, φ falling, θ rising");
-  rot_SW_ = T_SW_.linear();
-  trans_SW_ = T_SW_.translation();
+  const Eigen::Isometry3d T_SW = image.T_WS.inverse();
+  rot_SW_ = T_SW.linear();
+  trans_SW_ = T_SW.translation();
   // World z in the sensor frame, summed as lineOf sums R·v (lineOf returns it for vertical lines).
   for (int i = 0; i < 3; ++i) up_[i] = (rot_SW_(i, 0) * 0.0 + rot_SW_(i, 1) * 0.0) + rot_SW_(i, 2) * 1.0;
   // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1]; g is smooth).
