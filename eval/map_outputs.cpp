@@ -212,6 +212,7 @@ void writeMapFiles(const std::filesystem::path& dir, const std::string& stem, co
   const auto& g = map.grid();
   writeTiff(dir / (stem + "_elevation.tiff"), map.elevation());
   writeTiff(dir / (stem + "_sigma.tiff"), map.sigma());
+  writeTiff(dir / (stem + "_shadow_ceiling.tiff"), map.shadowCeiling());
   const cv::Mat state(g.rows, g.cols, CV_8UC1, const_cast<std::uint8_t*>(map.state().data()));
   writePng(dir / (stem + "_state.png"), state);
   nlohmann::ordered_json meta;

@@ -12,18 +12,26 @@ ElevationMap::ElevationMap(const MapGrid& grid)
     : grid_(grid),
       z_(MapRaster::Constant(grid.rows, grid.cols, kNaN)),
       sigma_(MapRaster::Constant(grid.rows, grid.cols, kNaN)),
+      ceiling_(MapRaster::Constant(grid.rows, grid.cols, kNaN)),
       state_(StateRaster::Constant(grid.rows, grid.cols, std::uint8_t(CellState::Unseen))) {}
 
 void ElevationMap::setKnown(int r, int c, float z, float sigma) {
   z_(r, c) = z;
   sigma_(r, c) = sigma;
+  ceiling_(r, c) = kNaN;
   state_(r, c) = std::uint8_t(CellState::Known);
 }
 
 void ElevationMap::setUnknown(int r, int c, CellState why) {
   z_(r, c) = kNaN;
   sigma_(r, c) = kNaN;
+  ceiling_(r, c) = kNaN;
   state_(r, c) = std::uint8_t(why);
+}
+
+void ElevationMap::setShadow(int r, int c, float ceiling) {
+  setUnknown(r, c, CellState::Shadow);
+  ceiling_(r, c) = ceiling;
 }
 
 std::optional<double> ElevationMap::elevationAt(double x, double y) const {

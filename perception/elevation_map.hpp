@@ -1,6 +1,7 @@
 #pragma once
 // An elevation map: a gravity-aligned grid (perception::MapGrid, north-up) with named layers —
-// elevation, σ_z and state. Unknown elevation is NaN *and* a state (unseen or range shadow).
+// elevation, σ_z, state, and the shadow ceiling. Unknown elevation is NaN *and* a state (unseen
+// or range shadow).
 #include <Eigen/Core>
 #include <cstdint>
 #include <optional>
@@ -13,7 +14,8 @@ enum class CellState : std::uint8_t {
   Unseen = 0,  // no data: outside the field of view, beyond range, no return, not asked for, or
                // in the undecidable part of the gap at an occluding edge (docs/locus.md)
   Known = 1,   // elevation and σ_z are set
-  Shadow = 2,  // the cell's line meets the image at an occluding edge: hidden behind terrain
+  Shadow = 2,  // the cell's line meets the image at an occluding edge: hidden behind terrain,
+               // below the shadow ceiling where there is one
 };
 
 using MapRaster = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -32,10 +34,16 @@ class ElevationMap {
   const MapRaster& sigma() const { return sigma_; }
   StateRaster& state() { return state_; }
   const StateRaster& state() const { return state_; }
+  // Per shadow cell, the height its terrain is known to lie below: where the lowest sampled ray
+  // that passes over the cell crosses its vertical line (docs/locus.md). NaN elsewhere, and in a
+  // shadow cell that no sampled ray passes over.
+  MapRaster& shadowCeiling() { return ceiling_; }
+  const MapRaster& shadowCeiling() const { return ceiling_; }
 
   CellState stateAt(int r, int c) const { return CellState(state_(r, c)); }
   void setKnown(int r, int c, float z, float sigma);
-  void setUnknown(int r, int c, CellState why);  // Unseen or Shadow
+  void setUnknown(int r, int c, CellState why);  // Unseen or Shadow (without a ceiling)
+  void setShadow(int r, int c, float ceiling);
 
   // The elevation / σ of the cell containing (x, y); nullopt outside the grid or not known.
   std::optional<double> elevationAt(double x, double y) const;
@@ -46,7 +54,7 @@ class ElevationMap {
 
  private:
   MapGrid grid_;
-  MapRaster z_, sigma_;
+  MapRaster z_, sigma_, ceiling_;
   StateRaster state_;
 };
 

@@ -44,12 +44,14 @@ LaneIsa detectLaneIsa() {
 struct Ctx {
   const double *sin_phi, *cos_phi, *inv_den, *phi, *poly, *sigma, *g;
   const float* range;
+  const float* above_min;  // LocusMapper::above_min_ (clearAbove)
   const std::uint8_t* flags;
   double bx, by, bz, limit, index_scale, step, last_col, last_row, phi0, inv_dphi, neg_inv_dphi, inv_dtheta;
   double eps, noise_k, qvar;
   double R[3][3], t[3];   // T_SW
   double x_min, cell, uy;  // the map row: cell c's centre is (x_min + (c + 0.5)·cell, uy)
-  int rows, cols, hint;
+  double s_top, s_bottom, box_x0, box_x1;  // the returns' bounds: the vertical lines' clip
+  int rows, cols, hint, above_levels;
 };
 
 // What the lanes finished, by lane of the group.
@@ -135,10 +137,15 @@ unsigned LocusMapper::mapLanes(LaneIsa isa, const MapGrid& grid, int row, int c0
   static_assert(sizeof(CellSigma) == 5 * sizeof(double), "CellSigma is gathered as five doubles");
   static_assert(sizeof(AngleTable::Poly) == 4 * sizeof(double), "Poly is gathered as four doubles");
   if (hint < 0 || hint + 1 >= rows_ || config_.bisection || isa == LaneIsa::None) return 0;
+  const double uy = grid.y_max - (row + 0.5) * grid.cell;
+  if (bounds_.isEmpty() || uy < bounds_.min().y() || uy > bounds_.max().y()) return 0;  // the walk decides
   Ctx k{};
   k.sin_phi = sin_phi_.data(), k.cos_phi = cos_phi_.data(), k.inv_den = vertical_inv_den_.data();
   k.phi = image_.phi.data(), k.poly = &column_of_.polys[0].x, k.sigma = &cell_sigma_[0].normal.x();
   k.g = roughness_g_.data(), k.range = image_.range.data(), k.flags = cell_flags_.data();
+  k.above_min = above_min_.data(), k.above_levels = above_levels_;
+  k.s_top = bounds_.max().z(), k.s_bottom = bounds_.min().z();  // u.z = 0: clipToBox's s for v = z
+  k.box_x0 = bounds_.min().x(), k.box_x1 = bounds_.max().x();
   k.bx = up_.x(), k.by = up_.y(), k.bz = up_.z();
   k.limit = column_of_.limit, k.index_scale = column_of_.index_scale, k.step = column_of_.step;
   k.last_col = last_col_, k.last_row = last_row_, k.phi0 = phi0_, k.inv_dphi = inv_dphi_;
@@ -148,7 +155,7 @@ unsigned LocusMapper::mapLanes(LaneIsa isa, const MapGrid& grid, int row, int c0
     for (int j = 0; j < 3; ++j) k.R[i][j] = rot_SW_(i, j);
     k.t[i] = trans_SW_[i];
   }
-  k.x_min = grid.x_min, k.cell = grid.cell, k.uy = grid.y_max - (row + 0.5) * grid.cell;
+  k.x_min = grid.x_min, k.cell = grid.cell, k.uy = uy;
   k.rows = rows_, k.cols = cols_, k.hint = hint;
   Out o;
   unsigned done = 0;

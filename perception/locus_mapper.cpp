@@ -245,6 +245,14 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
       if (up.delta < 0 && down.delta >= 0) r1 = r, r2 = r + 1, s1 = up, s2 = down;
     }
   }
+  // A bracket near the hint is the crossing the walk from the line's top would find only if the
+  // line above it is in front of everything seen: otherwise that walk decides.
+  if (r1 >= 0) {
+    double s_lo, s_hi;
+    if (!(s1.s > s2.s) || bounds_.isEmpty() || !clipToBox(bounds_, u, v, s_lo, s_hi) || !(s2.s >= s_lo) ||
+        !clearAbove(line, s_hi, r1, s1))
+      r1 = r2 = -1;
+  }
   if (r1 < 0) {
     double s_lo, s_hi;
     if (bounds_.isEmpty() || !clipToBox(bounds_, u, v, s_lo, s_hi)) return hit;
@@ -447,28 +455,137 @@ double LocusMapper::hermiteRoot(double phi_a, double y0, double g0, double phi_b
   return phi_a + t * h;
 }
 
-// Between the last scanline that sees the near side of an occluding edge and the first that sees
-// past it, each surface goes on unseen: the near one up to its edge, the far one back to where
-// the edge's shadow on it ends, both somewhere in that gap. Where exactly the image cannot tell;
-// the nearest-sample rule gives each surface the half of the gap next to its own samples. A line
-// that meets a surface, extended linearly (range against row) from its last two samples, within
-// its half of the gap may be on it — visible, but not sampled — or just in the shadow beside
-// it: such a cell is unseen, neither known nor a range shadow.
+// At an occluding edge the line is in front of what scanline r1 saw and behind what r2 saw: the
+// far surface (seen at r1 and beyond it) and the near one (seen at r2 and beyond it) each go on
+// unseen into the gap between the two, the near one up to its edge and the far one back to where
+// the edge's shadow on it ends, and the image cannot tell where exactly. Each surface is extended
+// from its last two samples, linearly in inverse range against row (exact for a plane to second
+// order in the scanline spacing; range itself grows faster than linearly across a plane): the near one as far as its edge can
+// be, one scanline (to r1's ray: r1 saw past it), so that the visible top of a lip is never
+// called shadow; the far one half a scanline, to the middle of the gap, where the edge's shadow
+// ends on it on average. A mixed pixel (its footprint straddled the edge: a range between the two
+// surfaces, footprints one scanline wide) says the edge is inside its footprint: then the near
+// surface may reach the footprint's far side, 1.5 scanlines past its last clean sample, and the
+// far one is extended to the mixed pixel's centre. A line that meets either extension is unseen
+// (maybe on that surface, visible but not sampled); every other line there is in the shadow.
 bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Sample& s2) const {
-  const double i1 = s1.rho - s1.delta, i2 = s2.rho - s2.delta;  // the image's ranges on the line
-  const double rho_mid = 0.5 * (s1.rho + s2.rho);  // the line's range midway between the scanlines
-  for (const bool first : {true, false}) {  // the surface sampled at r1, then the one at r2
-    const int r_side = first ? r1 : r2, r_other = first ? r2 : r1;
-    const Sample& side = first ? s1 : s2;
-    const int r_next = 2 * r_side - r_other;  // one scanline further from the edge, on that side
-    if (r_next < 0 || r_next >= rows_) continue;
-    const double q0 = image_.range(r_next, side.c0), q1 = image_.range(r_next, side.c0 + 1);
-    if (!std::isfinite(q0) || !std::isfinite(q1)) continue;
-    const double i_side = first ? i1 : i2, i_next = (1 - side.fc) * q0 + side.fc * q1;
-    const double i_mid = i_side + 0.5 * (i_side - i_next);  // that surface extended half a scanline
-    if ((side.delta < 0) != (rho_mid - i_mid < 0)) return true;
+  const int d = r2 - r1;  // from the far side to the near side
+  const auto imageAt = [&](int r, const Sample& s) {  // the image's range at scanline r, in s's columns
+    if (r < 0 || r >= rows_) return kNaN;
+    return (1 - s.fc) * double(image_.range(r, s.c0)) + s.fc * double(image_.range(r, s.c0 + 1));
+  };
+  // The line's range at (fractional) row r, linear between its samples at r1 and r2.
+  const auto lineAt = [&](double r) { return s1.rho + (s2.rho - s1.rho) * (r - r1) / d; };
+  // Edge pixels come in pairs across a discontinuity; a mixed pixel sits between two (far to
+  // mixed, mixed to near), so it and both its neighbours across scanlines are edge pixels, and its
+  // range lies between theirs.
+  const auto edgeAt = [&](int r, const Sample& s) {
+    if (r < 0 || r >= rows_ || !edges_) return false;
+    return ((*edges_)(r, s.c0) && s.fc != 1.0) || ((*edges_)(r, s.c0 + 1) && s.fc != 0.0);
+  };
+  const double far0 = s1.rho - s1.delta, near0 = s2.rho - s2.delta;
+  const double far1 = imageAt(r1 - d, s1), far2 = imageAt(r1 - 2 * d, s1);
+  const double near1 = imageAt(r2 + d, s2);
+  const bool near_mixed = edgeAt(r2 + d, s2) && near1 < near0 && near0 < far0;  // r2 between the sides
+  const bool far_mixed = !near_mixed && edgeAt(r1 - d, s1) && near0 < far0 && far0 < far1;
+  const bool mix = near_mixed || far_mixed;
+  // The near surface: its last clean sample at row n0, then up to three more past it, fitted by a
+  // line in inverse range against row (least squares: the fit's error grows slower with the
+  // distance it is carried than two samples' does).
+  const int n0 = near_mixed ? r2 + d : r2;
+  double sk = 0, sy = 0, skk = 0, sky = 0;
+  int n = 0;
+  for (int k = 0; k < 4; ++k) {
+    const double y = k == 0 ? (near_mixed ? near1 : near0) : imageAt(n0 + k * d, s2);
+    if (!std::isfinite(y)) break;
+    sk += k, sy += 1 / y, skk += k * k, sky += k / y, ++n;
+  }
+  // (With a single sample the near surface's course past it is unknown, so is the edge's place.)
+  if (n < 2) return true;
+  const double k_mean = sk / n, s_kk = skk - sk * k_mean;
+  const double slope = (sky - sk * sy / n) / s_kk, at_mean = sy / n;
+  const double t_near = mix ? 1.5 : 1.0;  // scanlines past n0 towards the far side
+  const double inv_near = at_mean + slope * (-t_near - k_mean);
+  // The extension's range errs by σ_ext = σ_p·√(1/n + (t + k̄)²/S_kk) (σ_p at the near surface's
+  // range); the near surface gets one σ_ext more, so that noise rarely puts a visible lip top into
+  // the shadow (each σ_ext more costs shadow recall: docs/locus.md has the trade's figures).
+  const double na = 1 / (sy / n), noise = config_.noise_k * na * na;
+  const double sigma_ext =
+      std::sqrt((noise * noise + quantization_var_) * (1.0 / n + (t_near + k_mean) * (t_near + k_mean) / s_kk));
+  if (!(inv_near > 0) || lineAt(n0 - t_near * d) < 1 / inv_near + sigma_ext) return true;
+  // The far surface: last clean sample at f0, range a, the sample past it b.
+  const int f0 = far_mixed ? r1 - d : r1;
+  const double fa = far_mixed ? far1 : far0, fb = far_mixed ? far2 : far1;
+  if (std::isfinite(fb)) {
+    const double t = mix ? 1.0 : 0.5;  // scanlines past f0 towards the near side
+    if (lineAt(f0 + t * d) * (1 / fa + t * (1 / fa - 1 / fb)) >= 1) return true;  // behind it there
   }
   return false;
+}
+
+// A mixed pixel whose footprint straddled an occluding edge returns a range between the two
+// surfaces, so the range image has two jumps there (far to mixed, mixed to near), and the edge
+// detector can see the larger one only: it then takes the mixed pixel for part of the other
+// surface, and a line crossing between the mixed pixel and that surface would be "known" on a
+// surface that is not there. Such a pixel is an edge pixel (paired with its neighbour beyond it),
+// and departs from the other surface, extrapolated linearly in inverse range from its two nearest
+// samples, towards the first surface by more than three standard deviations of that departure's
+// noise (√6·σ_p: the pixel and the extrapolation, 2·i₁ − i₂). Here r1 or r2 (the one with edge
+// pixels) is checked.
+bool LocusMapper::linkedMixedPixel(int r1, int r2, const Sample& s1, const Sample& s2) const {
+  if (!edges_) return false;
+  const int d = r2 - r1;
+  const bool far_side = s1.edges != 0;  // r1 is the edge pixel: a mixed pixel linked to the near side
+  const int m = far_side ? r1 : r2, beyond = far_side ? r1 - d : r2 + d, o1 = far_side ? r2 : r1,
+            o2 = far_side ? r2 + d : r1 - d;
+  const Sample& sm = far_side ? s1 : s2;
+  if (beyond < 0 || beyond >= rows_ || o2 < 0 || o2 >= rows_) return false;
+  const bool paired = ((*edges_)(beyond, sm.c0) && sm.fc != 1.0) || ((*edges_)(beyond, sm.c0 + 1) && sm.fc != 0.0);
+  if (!paired) return false;
+  const auto imageAt = [&](int r) {
+    return (1 - sm.fc) * double(image_.range(r, sm.c0)) + sm.fc * double(image_.range(r, sm.c0 + 1));
+  };
+  const double i_m = imageAt(m), i1 = imageAt(o1), i2 = imageAt(o2);
+  if (!std::isfinite(i_m) || !std::isfinite(i1) || !std::isfinite(i2)) return false;
+  const double inv = 2 / i1 - 1 / i2;  // the other surface's inverse range extrapolated to m
+  if (!(inv > 0)) return false;
+  const double noise = config_.noise_k * i_m * i_m;
+  const double departure = (i_m - 1 / inv) * (far_side ? 1.0 : -1.0);  // towards the first surface
+  return departure > 3 * std::sqrt(6 * (noise * noise + quantization_var_));
+}
+
+bool LocusMapper::clearAbove(const Line& l, double s_top, int r1, const Sample& s1) const {
+  if (!(s1.s <= s_top)) return false;
+  const Eigen::Vector3d top = l.a + s_top * l.b;
+  if (!(top.y() > 0)) return false;  // then the segment is in front of the sensor throughout
+  // The columns the segment [s1.s, s_top] sweeps: x/ρ = sin θ has one extremum along a line, at
+  // s* (|b| = 1), so θ lies between its values at the ends and at s*, if s* is inside.
+  const auto column = [&](const Eigen::Vector3d& p) {
+    return column_of_(p.x() / std::sqrt(p.y() * p.y() + p.z() * p.z()));
+  };
+  double c_min = s1.cf, c_max = s1.cf;
+  const double c_top = column(top);
+  c_min = std::min(c_min, c_top), c_max = std::max(c_max, c_top);
+  const double ab = l.a.dot(l.b), den = l.b.x() * ab - l.a.x();
+  if (den != 0.0) {
+    const double s_ext = (l.a.x() * ab - l.b.x() * l.a.squaredNorm()) / den;
+    if (s_ext > s1.s && s_ext < s_top) {
+      const double c_ext = column(l.a + s_ext * l.b);
+      c_min = std::min(c_min, c_ext), c_max = std::max(c_max, c_ext);
+    }
+  }
+  if (!(c_min > -2.0 && c_max < cols_ + 1.0)) return false;  // also NaN
+  // The pixels a scanline's interpolation can read there (c0 = ⌊cf⌋ and c0 + 1), widened by far
+  // more than the column tables' error (1.3e-10 rad) in case it moves cf across a pixel boundary.
+  const int c_lo = std::max(0, int(std::floor(c_min - 1e-6))), c_hi = std::min(cols_ - 1, int(std::floor(c_max + 1e-6)) + 1);
+  if (c_lo > c_hi) return true;  // the segment is beside the image: nothing above is seen
+  const int k = 31 - __builtin_clz(unsigned(c_hi - c_lo + 1));
+  if (k >= above_levels_) return false;
+  const float* level = above_min_.data() + std::size_t(k) * rows_ * cols_ + std::size_t(r1) * cols_;
+  const double nearest = std::min(level[c_lo], level[c_hi - (1 << k) + 1]);
+  // The line's range is convex along it: at most the larger of its ends' ranges.
+  const double farthest = std::max(s1.rho, top.norm());
+  return nearest > farthest * (1 + 1e-9) + 1e-9;
 }
 
 void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen::Vector3d& v, int r1, int r2,
@@ -496,14 +613,16 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
     jump_rows = std::max(std::abs(rng(0) - rng(2)), std::abs(rng(1) - rng(3)));
     jump_cols = std::max(std::abs(rng(0) - rng(1)), std::abs(rng(2) - rng(3)));
   }
-  const bool across_rows = (row1_edge && row2_edge) || ((e & 3u) && (e & 12u) && jump_rows >= jump_cols);
+  const bool across_rows = (row1_edge && row2_edge) || ((e & 3u) && (e & 12u) && jump_rows >= jump_cols) ||
+                           (row1_edge != row2_edge && linkedMixedPixel(r1, r2, s1, s2));
   const bool across_cols = (e & 5u) && (e & 10u) && jump_cols > jump_rows;
   if (across_rows && meetsSurfaceInGap(r1, r2, s1, s2)) {
-    hit.state = CellState::Unseen;  // on a surface past its last sample, or in the shadow beside it
+    hit.state = CellState::Unseen;  // maybe on a surface past its last sample
     return;
   }
   if (across_rows || across_cols) {
     hit.state = CellState::Shadow;  // the locus meets the image at an occluding edge
+    hit.ceiling = u + s1.s * v;     // below r1's ray, which passed over it
     return;
   }
   hit.state = CellState::Known;
@@ -544,7 +663,8 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
             const auto scalarCell = [&](int k, int* h) {
               const Eigen::Vector2d xy = grid.center(r, c0 + k);
               const LocusHit hit = intersect(Eigen::Vector3d(xy.x(), xy.y(), 0.0), v, h);
-              res[k] = {hit.state, float(hit.point.z()), float(hit.sigma), hit.bracket_row};
+              const double z = hit.state == CellState::Shadow ? hit.ceiling.z() : hit.point.z();
+              res[k] = {hit.state, float(z), float(hit.sigma), hit.bracket_row};
             };
             // Without a hint (the row's start, or nothing found yet), one cell at a time until
             // one finds a bracket; the rest of the group starts from it.
@@ -559,6 +679,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
                 scalarCell(k, &h);
               }
               if (res[k].state == CellState::Known) out.setKnown(r, c0 + k, res[k].z, res[k].sigma);
+              else if (res[k].state == CellState::Shadow) out.setShadow(r, c0 + k, res[k].z);
               else out.setUnknown(r, c0 + k, res[k].state);
               if (res[k].bracket_row >= 0) next = res[k].bracket_row;
             }
@@ -585,6 +706,7 @@ ElevationMap LocusMapper::mapPolygon(const std::vector<Eigen::Vector2d>& polygon
         if (!insidePolygon(polygon, xy)) continue;
         const LocusHit hit = elevationAt(xy.x(), xy.y());
         if (hit.state == CellState::Known) out.setKnown(r, c, float(hit.point.z()), float(hit.sigma));
+        else if (hit.state == CellState::Shadow) out.setShadow(r, c, float(hit.ceiling.z()));
         else out.setUnknown(r, c, hit.state);
       }
   });

@@ -22,7 +22,7 @@ struct LocusConfig {
                               // (the same bracket and stopping rule, fewer evaluations)
   double noise_k = 3e-4;      // σ_ρ = k·ρ² of the sensor, for σ along the line
   double quantization_m = 0.0762;  // adds q²/12 to the range variance; 0 = none
-  double z_margin_m = 1.0;    // lines are searched within the returns' bounds ± this margin
+  double z_margin_m = 0.3;    // lines are searched within the returns' bounds ± this margin (docs/locus.md)
   bool roughness = true;      // σ includes the surface's roughness between pixels (docs/locus.md)
   double roughness_hurst = 0.7;  // H of the fBm assumed between pixels (0.5: Brownian)
   bool vectorized = true;  // maps: the common case in SIMD lanes (8 AVX-512 or 2 × 4 AVX2) where
@@ -34,6 +34,9 @@ struct LocusHit {
   Eigen::Vector3d point = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   double s = std::numeric_limits<double>::quiet_NaN();      // position along the line
   double sigma = std::numeric_limits<double>::quiet_NaN();  // σ of s (σ_z for vertical lines)
+  // Shadow: the point of the line under the lowest sampled ray that passes over it (its z is the
+  // shadow ceiling of a map cell); NaN where the line runs behind a seen surface from its top.
+  Eigen::Vector3d ceiling = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   double phi = 0, theta = 0, rho = 0;                       // where the line met the image
   int evaluations = 0;                                      // Δ evaluations spent
   int bracket_row = -1;  // the upper scanline of the two that bracket the crossing; −1: none found
@@ -140,7 +143,7 @@ class LocusMapper {
   // One map cell's result as map() stores it.
   struct CellResult {
     CellState state;
-    float z, sigma;
+    float z, sigma;  // Known: the elevation and σ_z; Shadow: z is the ceiling
     int bracket_row;
   };
   // The cells (row, c0 + k), k < n ≤ kLanes, of `grid` whose search from `hint` takes the common path
@@ -153,9 +156,19 @@ class LocusMapper {
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;
   double sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
                         const Eigen::Vector3d& b) const;
-  // At an occluding edge across the scanlines r1 (s1) and r2 = r1 ± 1 (s2): does the line meet
-  // either surface, extended past its last sample, between the two scanlines?
+  // At an occluding edge between the scanlines r1 (s1: the line in front of what it saw) and
+  // r2 = r1 ± 1 (s2: behind the near surface): could the line be on either surface, extended
+  // past its last sample into the gap (docs/locus.md)?
   bool meetsSurfaceInGap(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
+  // Whether the one of the scanlines r1, r2 that has edge pixels is a mixed pixel the edge
+  // detector took for part of the other surface (docs/locus.md).
+  bool linkedMixedPixel(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
+  // Whether the line above the scanline bracket (r1, r1 + 1) that a hint found is provably in
+  // front of everything the sensor saw, so that the walk down the line from its top would find
+  // the same bracket first (docs/locus.md, "The highest crossing"): every pixel on the top side
+  // of r1, across the columns the line sweeps between r1 and its top s_top, is farther than the
+  // line's farthest point there. s1 is the sample at r1 and s2 at r1 + 1.
+  bool clearAbove(const Line& l, double s_top, int r1, const LocusSample& s1) const;
   // The end of a search: the final bracket [lo, hi] (narrower than ε) inside the scanline bracket
   // (r1, s1; r2, s2) of the line u + s·v, classified (known or shadow) and written into `hit`.
   void finish(const Line& l, const Eigen::Vector3d& u, const Eigen::Vector3d& v, int r1, int r2,
@@ -181,6 +194,10 @@ class LocusMapper {
   std::vector<double> vertical_inv_den_;  // Line::inv_den of the vertical direction (world z)
   std::vector<std::uint8_t> cell_flags_;  // per 2×2 cell: bits 0–3 edge pixels, bit 4 all returned
   std::vector<CellSigma> cell_sigma_;
+  // above_min_[k][r][c]: the smallest range of the pixels in rows < r and columns [c, c + 2^k)
+  // (no return counts as +∞), for clearAbove's band queries, in above_levels_ levels.
+  std::vector<float> above_min_;
+  int above_levels_ = 0;
   Eigen::AlignedBox3d bounds_;  // world bounds of the returns, ± margin
 };
 

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "perception/locus_mapper.hpp"
@@ -166,6 +167,25 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   if (!bounds_.isEmpty()) {
     bounds_.min().array() -= config.z_margin_m;
     bounds_.max().array() += config.z_margin_m;
+  }
+  // The nearest return above each pixel, over column bands of 2^k pixels (clearAbove).
+  above_levels_ = 1;
+  while ((2 << (above_levels_ - 1)) <= cols_) ++above_levels_;
+  const std::size_t plane = std::size_t(rows_) * cols_;
+  above_min_.assign(plane * above_levels_, std::numeric_limits<float>::infinity());
+  for (int r = 1; r < rows_; ++r)
+    for (int c = 0; c < cols_; ++c) {
+      const float q = image.range(r - 1, c);
+      above_min_[std::size_t(r) * cols_ + c] =
+          std::min(above_min_[std::size_t(r - 1) * cols_ + c], std::isnan(q) ? std::numeric_limits<float>::infinity() : q);
+    }
+  for (int k = 1; k < above_levels_; ++k) {
+    const int half = 1 << (k - 1);
+    const float* prev = above_min_.data() + (k - 1) * plane;
+    float* cur = above_min_.data() + k * plane;
+    for (std::size_t r = 0; r < std::size_t(rows_); ++r)
+      for (int c = 0; c < cols_; ++c)
+        cur[r * cols_ + c] = c + half < cols_ ? std::min(prev[r * cols_ + c], prev[r * cols_ + c + half]) : prev[r * cols_ + c];
   }
   // Per 2×2 cell: which pixels returned and which are edge pixels, and the inputs of σ.
   const std::size_t cells = std::size_t(rows_ - 1) * (cols_ - 1);

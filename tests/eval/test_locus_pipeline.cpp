@@ -69,11 +69,14 @@ terrains::TerrainSpec ledge() {
   return t;
 }
 
-// Behind a 0.4 m ledge the locus map marks the range shadow: precision and recall ≥ 0.9 against
-// ground-truth visibility, and no truly hidden cell is reported known with an error above 3σ_z —
-// from several places on the ledge top, noise-free and noisy. Cells in the gap between the last
-// scanline that sees the top and the first that sees past the lip are unseen, not shadow
-// (docs/locus.md): each surface goes on unsampled into the half of that gap next to it.
+// Behind a 0.4 m ledge the locus map marks the range shadow: precision ≥ 0.9 against
+// ground-truth visibility, and no truly hidden cell reported known with an error above 3σ_z —
+// from several places on the ledge top, noise-free and noisy. Cells where the top may go on
+// past its last sample are unseen, never shadow (docs/locus.md): the lip lies anywhere in a gap
+// w ≈ ρ²·Δφ/h wide on the ground, so the map gives up to one gap of the shadow's depth S to the
+// top, and half a gap at its far end: recall ≥ 1 − 1.5·w/S whatever the lip's place in the gap
+// (0.77–0.79 for these views), and noise-free ≥ 0.9 (what the place of the lip in the gap
+// gives on average here: 1 − 0.625·w/S ≈ 0.91).
 TEST(LocusPipeline, LedgeCastsAShadowThatTheMapFinds) {
   const Bench bench(ledge(), 1);
   struct View {
@@ -97,8 +100,13 @@ TEST(LocusPipeline, LedgeCastsAShadowThatTheMapFinds) {
       const MapMetrics m = bench.run(sensor, view, map, 3);
       const std::string what = std::string(noisy ? "noisy" : "noise-free") + " from x = " + std::to_string(v.xyz_m.x());
       EXPECT_GT(m.hidden, 500) << what << ": the scene must have a real shadow";
+      const double h = v.xyz_m.z() - 0.4, d = v.xyz_m.x();  // above the top; from the lip
+      const double w = (h * h + d * d) * (30.0 * kDeg / 64) / h, S = 0.4 * d / h;
       EXPECT_GE(m.shadow_precision, 0.9) << what;
-      EXPECT_GE(m.shadow_recall, 0.9) << what;
+      EXPECT_GE(m.shadow_recall, 1 - 1.5 * w / S) << what;
+      if (!noisy) {
+        EXPECT_GE(m.shadow_recall, 0.9) << what;
+      }
       EXPECT_EQ(m.known_in_shadow_above_3sigma, 0) << what;
       std::printf("ledge %s: hidden %ld, shadow precision %.3f recall %.3f\n", what.c_str(), long(m.hidden),
                   m.shadow_precision, m.shadow_recall);

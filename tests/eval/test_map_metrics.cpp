@@ -45,7 +45,7 @@ struct Case {
     for (int i = 0; i < 7; ++i) map.setKnown(cells[i][0], cells[i][1], 1.0f + err[i], sig[i]);
     map.setKnown(1, 2, 3.0f, 0.1f);
     map.setUnknown(1, 3, CellState::Shadow);
-    map.setUnknown(1, 4, CellState::Shadow);
+    map.setShadow(1, 4, 0.75f);  // a shadow cell with a ceiling
     map.setUnknown(2, 0, CellState::Shadow);
     const char* v[4] = {"vvvvh", "vvvhh", "ovvvo", "hoooo"};
     for (int r = 0; r < 4; ++r)
@@ -254,6 +254,11 @@ TEST(MapFiles, RastersReadBackBitForBit) {
   writeMapFiles(out.dir, "case", k.map, &k.truth, "hand-made case");
   EXPECT_TRUE(sameBits(readTiff(out.dir / "case_elevation.tiff"), k.map.elevation()));
   EXPECT_TRUE(sameBits(readTiff(out.dir / "case_sigma.tiff"), k.map.sigma()));
+  const FloatRaster ceiling = readTiff(out.dir / "case_shadow_ceiling.tiff");
+  EXPECT_TRUE(sameBits(ceiling, k.map.shadowCeiling()));
+  EXPECT_EQ(ceiling(1, 4), 0.75f);           // the shadow cell's ceiling
+  EXPECT_TRUE(std::isnan(ceiling(1, 3)));    // a shadow cell without one
+  EXPECT_TRUE(std::isnan(ceiling(0, 0)));    // a known cell
   const cv::Mat state = cv::imread((out.dir / "case_state.png").string(), cv::IMREAD_UNCHANGED);
   ASSERT_EQ(state.type(), CV_8UC1);
   ASSERT_EQ(state.rows, 4);
