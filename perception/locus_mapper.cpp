@@ -622,7 +622,19 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   }
   if (across_rows || across_cols) {
     hit.state = CellState::Shadow;  // the locus meets the image at an occluding edge
-    hit.ceiling = u + s1.s * v;     // below r1's ray, which passed over it
+    // The ceiling: under the lowest ray that went past the line beyond doubt — r1's, or, where
+    // r1's range exceeds the line's by less than 3σ_p (that ray may have stopped at the line),
+    // the next scanline's up the line.
+    int rc = r1;
+    Sample sc = s1;
+    for (int k = 0; k < 4 && sc.valid; ++k) {
+      const double seen = sc.rho - sc.delta, noise = config_.noise_k * seen * seen;
+      if (sc.delta < -3 * std::sqrt(noise * noise + quantization_var_)) break;
+      rc -= r2 - r1;
+      sc = rc >= 0 && rc < rows_ ? atRow(line, rc) : Sample{};
+      if (sc.valid && !(sc.delta < 0)) sc.valid = false;
+    }
+    if (sc.valid) hit.ceiling = u + sc.s * v;
     return;
   }
   hit.state = CellState::Known;
