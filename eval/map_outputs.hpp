@@ -11,6 +11,7 @@ namespace ambler::eval {
 
 // Writes into `dir` (which must exist):
 //   <stem>_elevation.tiff, <stem>_sigma.tiff   float32, NaN where unknown
+//   <stem>_shadow_ceiling.tiff                 float32: the height a shadow cell lies below, NaN elsewhere
 //   <stem>_state.png                           uint8, pixel value = perception::CellState
 //   <stem>_meta.json                           {"x_min_m", "y_max_m", "cell_m", "rows", "cols"}
 //   <stem>_elevation.png, <stem>_sigma.png, <stem>_state_view.png, and, when `truth` is given
