@@ -459,33 +459,36 @@ double LocusMapper::hermiteRoot(double phi_a, double y0, double g0, double phi_b
 // far surface (seen at r1 and beyond it) and the near one (seen at r2 and beyond it) each go on
 // unseen into the gap between the two, the near one up to its edge and the far one back to where
 // the edge's shadow on it ends, and the image cannot tell where exactly. Each surface is extended
-// from its last two samples, linearly in inverse range against row (exact for a plane to second
-// order in the scanline spacing; range itself grows faster than linearly across a plane): the near one as far as its edge can
-// be, one scanline (to r1's ray: r1 saw past it), so that the visible top of a lip is never
-// called shadow; the far one half a scanline, to the middle of the gap, where the edge's shadow
-// ends on it on average. A mixed pixel (its footprint straddled the edge: a range between the two
-// surfaces, footprints one scanline wide) says the edge is inside its footprint: then the near
-// surface may reach the footprint's far side, 1.5 scanlines past its last clean sample, and the
-// far one is extended to the mixed pixel's centre. A line that meets either extension is unseen
-// (maybe on that surface, visible but not sampled); every other line there is in the shadow.
+// linearly in inverse range against row (exact for a plane to second order in the scanline
+// spacing; range itself grows faster than linearly across a plane): the near one, fitted to its
+// last clean samples, as far as its edge can be — one scanline (to r1's ray: r1 saw past it)
+// plus its extension's noise — so that the visible top of a lip is kept out of the shadow; the
+// far one half a scanline, to the middle of the gap, where the edge's shadow ends on it on
+// average. A mixed pixel (its footprint straddled the edge: a range between the two surfaces,
+// footprints one scanline wide) says the edge is inside its footprint: then the near surface may
+// reach the footprint's far side, 1.5 scanlines past its last clean sample, and the far one is
+// extended to the mixed pixel's centre. A line that meets either extension is unseen (maybe on
+// that surface, visible but not sampled); every other line there is in the shadow.
+double LocusMapper::rangeAt(int r, const Sample& s) const {
+  if (r < 0 || r >= rows_) return kNaN;
+  return (1 - s.fc) * double(image_.range(r, s.c0)) + s.fc * double(image_.range(r, s.c0 + 1));
+}
+
+bool LocusMapper::edgeAt(int r, const Sample& s) const {
+  if (r < 0 || r >= rows_ || !edges_) return false;
+  return ((*edges_)(r, s.c0) && s.fc != 1.0) || ((*edges_)(r, s.c0 + 1) && s.fc != 0.0);
+}
+
 bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Sample& s2) const {
   const int d = r2 - r1;  // from the far side to the near side
-  const auto imageAt = [&](int r, const Sample& s) {  // the image's range at scanline r, in s's columns
-    if (r < 0 || r >= rows_) return kNaN;
-    return (1 - s.fc) * double(image_.range(r, s.c0)) + s.fc * double(image_.range(r, s.c0 + 1));
-  };
   // The line's range at (fractional) row r, linear between its samples at r1 and r2.
   const auto lineAt = [&](double r) { return s1.rho + (s2.rho - s1.rho) * (r - r1) / d; };
   // Edge pixels come in pairs across a discontinuity; a mixed pixel sits between two (far to
   // mixed, mixed to near), so it and both its neighbours across scanlines are edge pixels, and its
   // range lies between theirs.
-  const auto edgeAt = [&](int r, const Sample& s) {
-    if (r < 0 || r >= rows_ || !edges_) return false;
-    return ((*edges_)(r, s.c0) && s.fc != 1.0) || ((*edges_)(r, s.c0 + 1) && s.fc != 0.0);
-  };
   const double far0 = s1.rho - s1.delta, near0 = s2.rho - s2.delta;
-  const double far1 = imageAt(r1 - d, s1), far2 = imageAt(r1 - 2 * d, s1);
-  const double near1 = imageAt(r2 + d, s2);
+  const double far1 = rangeAt(r1 - d, s1), far2 = rangeAt(r1 - 2 * d, s1);
+  const double near1 = rangeAt(r2 + d, s2);
   const bool near_mixed = edgeAt(r2 + d, s2) && near1 < near0 && near0 < far0;  // r2 between the sides
   const bool far_mixed = !near_mixed && edgeAt(r1 - d, s1) && near0 < far0 && far0 < far1;
   const bool mix = near_mixed || far_mixed;
@@ -496,7 +499,7 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   double sk = 0, sy = 0, skk = 0, sky = 0;
   int n = 0;
   for (int k = 0; k < 4; ++k) {
-    const double y = k == 0 ? (near_mixed ? near1 : near0) : imageAt(n0 + k * d, s2);
+    const double y = k == 0 ? (near_mixed ? near1 : near0) : rangeAt(n0 + k * d, s2);
     if (!std::isfinite(y)) break;
     sk += k, sy += 1 / y, skk += k * k, sky += k / y, ++n;
   }
@@ -540,12 +543,8 @@ bool LocusMapper::linkedMixedPixel(int r1, int r2, const Sample& s1, const Sampl
             o2 = far_side ? r2 + d : r1 - d;
   const Sample& sm = far_side ? s1 : s2;
   if (beyond < 0 || beyond >= rows_ || o2 < 0 || o2 >= rows_) return false;
-  const bool paired = ((*edges_)(beyond, sm.c0) && sm.fc != 1.0) || ((*edges_)(beyond, sm.c0 + 1) && sm.fc != 0.0);
-  if (!paired) return false;
-  const auto imageAt = [&](int r) {
-    return (1 - sm.fc) * double(image_.range(r, sm.c0)) + sm.fc * double(image_.range(r, sm.c0 + 1));
-  };
-  const double i_m = imageAt(m), i1 = imageAt(o1), i2 = imageAt(o2);
+  if (!edgeAt(beyond, sm)) return false;  // paired
+  const double i_m = rangeAt(m, sm), i1 = rangeAt(o1, sm), i2 = rangeAt(o2, sm);
   if (!std::isfinite(i_m) || !std::isfinite(i1) || !std::isfinite(i2)) return false;
   const double inv = 2 / i1 - 1 / i2;  // the other surface's inverse range extrapolated to m
   if (!(inv > 0)) return false;

@@ -160,6 +160,10 @@ class LocusMapper {
   // r2 = r1 ± 1 (s2: behind the near surface): could the line be on either surface, extended
   // past its last sample into the gap (docs/locus.md)?
   bool meetsSurfaceInGap(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
+  // The image at scanline r in sample s's columns: its range interpolated as s was (NaN off the
+  // image), and whether a pixel with weight there is an occluding-edge pixel.
+  double rangeAt(int r, const LocusSample& s) const;
+  bool edgeAt(int r, const LocusSample& s) const;
   // Whether the one of the scanlines r1, r2 that has edge pixels is a mixed pixel the edge
   // detector took for part of the other surface (docs/locus.md).
   bool linkedMixedPixel(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
