@@ -1,6 +1,5 @@
 #include "eval/bench.hpp"
 
-#include <embree3/rtcore.h>
 #include <tbb/blocked_range2d.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
@@ -16,7 +15,9 @@
 #include <vector>
 
 #include "eval/io.hpp"
-#include "eval/mapping.hpp"
+#include "eval/scenario.hpp"
+#include "perception/cartesian_mapper.hpp"
+#include "perception/scan_to_map.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
 #include "sim/ray_scene.hpp"
@@ -66,46 +67,6 @@ std::unique_ptr<BenchWorld> makeBenchWorld() {
   return std::unique_ptr<BenchWorld>(new BenchWorld{dir, sim::World::load(xml)});
 }
 
-// The scan's rays in 4×4 tiles, as the emulator casts them, into bare Embree packets; only the
-// hit distance is kept. This is the reference the emulator is compared with.
-void bareEmbreeCast(RTCScene scene, const perception::RangeImage& img, const Eigen::Isometry3d& T,
-                    std::vector<float>& t_out) {
-  const int rows = img.rows(), cols = img.cols();
-  std::vector<double> sp(rows), cp(rows), st(cols), ct(cols);
-  for (int r = 0; r < rows; ++r) sp[r] = std::sin(img.phi[r]), cp[r] = std::cos(img.phi[r]);
-  for (int c = 0; c < cols; ++c) st[c] = std::sin(img.theta[c]), ct[c] = std::cos(img.theta[c]);
-  const Eigen::Matrix3d R = T.linear();
-  const Eigen::Vector3d o = T.translation();
-  t_out.resize(std::size_t(rows) * cols);
-  tbb::parallel_for(tbb::blocked_range2d<int>(0, (rows + 3) / 4, 0, (cols + 3) / 4), [&](const auto& range) {
-    RTCRayHit16 rh;
-    alignas(64) int valid[16];
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
-    for (int tr = range.rows().begin(); tr != range.rows().end(); ++tr)
-      for (int tc = range.cols().begin(); tc != range.cols().end(); ++tc) {
-        for (int i = 0; i < 16; ++i) {
-          const int r = std::min(tr * 4 + i / 4, rows - 1), c = std::min(tc * 4 + i % 4, cols - 1);
-          valid[i] = (tr * 4 + i / 4 < rows && tc * 4 + i % 4 < cols) ? -1 : 0;
-          const Eigen::Vector3d d = R * Eigen::Vector3d(st[c], cp[r] * ct[c], sp[r] * ct[c]);
-          rh.ray.org_x[i] = float(o.x()), rh.ray.org_y[i] = float(o.y()), rh.ray.org_z[i] = float(o.z());
-          rh.ray.dir_x[i] = float(d.x()), rh.ray.dir_y[i] = float(d.y()), rh.ray.dir_z[i] = float(d.z());
-          rh.ray.tnear[i] = 0.0f;
-          rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
-          rh.ray.mask[i] = 0xFFFFFFFFu;
-          rh.ray.time[i] = 0.0f;
-          rh.ray.flags[i] = 0;
-          rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
-          rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect16(valid, scene, &ctx, &rh);
-        for (int i = 0; i < 16; ++i)
-          if (valid[i]) t_out[std::size_t(tr * 4 + i / 4) * cols + tc * 4 + i % 4] = rh.ray.tfar[i];
-      }
-  });
-}
-
 }  // namespace
 
 nlohmann::ordered_json benchScan(const BenchOptions& opt) {
@@ -116,7 +77,7 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
   const int reps = opt.repetitions;
 
   // 1. 64×256, one thread: the emulator (ERIM defaults, one ray per pixel) vs a plain mj_ray loop.
-  sim::ErimConfig small;
+  perception::SensorModel small;  // the ERIM's defaults
   small.mixed_pixels = false;
   const sim::ErimScanner scanner_small(scene, small);
   double emu_s = 0, emu_mixed_s = 0, mj_s = 0;
@@ -125,7 +86,7 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
     sim::Scan out;  // reused, as a sweep would
     emu_s = timeMedian(reps, [&] { scanner_small.scan(T, 1, out); });
-    sim::ErimConfig mixed = small;
+    perception::SensorModel mixed = small;
     mixed.mixed_pixels = true;
     const sim::ErimScanner scanner_mixed(scene, mixed);
     emu_mixed_s = timeMedian(reps, [&] { scanner_mixed.scan(T, 1, out); });
@@ -145,7 +106,7 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
   const double emu_mrays = rays_small / emu_s / 1e6, mj_mrays = mj_rays / mj_s / 1e6;
 
   // 2. 1024×4096, all cores: the emulator vs a bare Embree packet cast of the same rays.
-  sim::ErimConfig large = small;
+  perception::SensorModel large = small;
   large.rows = 1024;
   large.cols = 4096;
   const sim::ErimScanner scanner_large(scene, large);
@@ -158,7 +119,7 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
     const auto t0 = std::chrono::steady_clock::now();
     scanner_large.scan(T, 1, s);
     const auto t1 = std::chrono::steady_clock::now();
-    bareEmbreeCast(scene.embreeScene(), img_large, T, t_bare);
+    scene.referenceCast(img_large, T, t_bare);
     const auto t2 = std::chrono::steady_clock::now();
     if (i == 0) continue;  // warm-up
     emu_large_s.push_back(std::chrono::duration<double>(t1 - t0).count());
@@ -199,14 +160,21 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   const auto bw = makeBenchWorld();
   const sim::RayScene scene(bw->world);
   const Eigen::Isometry3d T = perception::sensorPose({0, -6, 3}, {0, -30.0 * std::numbers::pi / 180, 0});
-  const sim::ErimConfig erim;  // ERIM defaults: noise, quantisation, wrap, mixed pixels
-  const sim::Scan scan = sim::ErimScanner(scene, erim).scan(T, 1);
-  SensorSpec sensor;  // the same defaults, as the scenario would give them
-  perception::RangeImage image = scan.image;
-  perception::unwrapRanges(image, sensor.ambiguity_m);
+  const perception::SensorModel sensor;  // the ERIM's defaults: noise, quantisation, wrap, mixed pixels
+  const sim::Scan scan = sim::ErimScanner(scene, sensor).scan(T, 1);
+  // The image and edge mask every map below is made from, as the run's map stage makes them.
+  MapSpec region;
+  const perception::ScanMap base = perception::scanToMap(scan.image, sensor, T, region.grid());
+  const perception::RangeImage& image = base.image;
+  const perception::Raster<std::uint8_t>& edges = *base.edges;
+  perception::GncConfig gnc;
+  gnc.sensor = sensor;
   const auto t_edges = std::chrono::steady_clock::now();
-  const perception::EdgeMask edges = perception::detectRangeEdges(image);
+  perception::detectRangeEdges(image, gnc);
   const double edges_ms = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_edges).count() * 1e3;
+  perception::LocusConfig locus;
+  locus.sensor = sensor;
+  locus.epsilon_rad = region.epsilon_rad;
 
   nlohmann::ordered_json j, one, all, speedup, cart, scalar_one, avx2_one, lanes;
   const perception::LaneIsa isa = perception::LocusMapper::laneIsa();
@@ -216,11 +184,11 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   std::printf("  %-8s %10s %14s %14s %10s %16s %16s %14s %8s\n", "cell", "cells", "locus 1t ns", "locus all ns",
               "speedup", "cartesian 1t ns", "scalar 1t ns", "AVX2 1t ns", "lanes");
   for (double cell : {0.02, 0.05, 0.10, 0.20}) {
-    MapSpec spec;
+    MapSpec spec = region;
     spec.cell_m = cell;
-    const perception::MapGrid grid = mapGrid(spec);
-    const perception::LocusMapper mapper(image, &edges, locusConfig(spec, sensor));
-    perception::LocusConfig scalar_config = locusConfig(spec, sensor);
+    const perception::MapGrid grid = spec.grid();
+    const perception::LocusMapper mapper(image, &edges, locus);
+    perception::LocusConfig scalar_config = locus;
     scalar_config.vectorized = false;
     const perception::LocusMapper scalar(image, &edges, scalar_config);
     const double cells = double(grid.cells());
@@ -253,11 +221,10 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
       tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
       ts = timeMedian(opt.repetitions, [&] { scalar.map(grid); });
       if (isa == perception::LaneIsa::Avx512) {  // what a CPU with AVX2 but no AVX-512 would run
-        perception::LocusMapper::capLaneIsa(perception::LaneIsa::Avx2);
+        const perception::LaneIsaCap avx2(perception::LaneIsa::Avx2);
         t2 = timeMedian(opt.repetitions, [&] { mapper.map(grid); });
-        perception::LocusMapper::capLaneIsa(perception::LaneIsa::Avx512);
       }
-      tc = timeMedian(opt.repetitions, [&] { buildCartesianMap(image, spec, perception::GapFill::Linear); });
+      tc = timeMedian(opt.repetitions, [&] { perception::cartesianMap(image, grid, {}); });
     }
     char key[16];
     std::snprintf(key, sizeof key, "%.2f", cell);
@@ -277,7 +244,7 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   double setup_s = 0;
   {
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-    setup_s = timeMedian(opt.repetitions, [&] { perception::LocusMapper(image, &edges, perception::LocusConfig{}); });
+    setup_s = timeMedian(opt.repetitions, [&] { perception::LocusMapper(image, &edges, locus); });
   }
   std::printf("  per image, 1 thread: edge detection (GNC) %.2f ms, locus mapper tables %.2f ms\n", edges_ms,
               setup_s * 1e3);

@@ -198,7 +198,7 @@ std::string tiltLabel(const Scenario& s) {
   return out;
 }
 
-std::string noiseLabel(const SensorSpec& s) {
+std::string noiseLabel(const perception::SensorModel& s) {
   if (s.noise_k == 0 && s.quantization_m == 0) return "none, unquantised";
   const std::string q = s.quantization_m == 0 ? ", unquantised" : "";
   return s.noise_k == 0 ? "quantisation only" + q : format("k = %g", s.noise_k) + q;
@@ -525,7 +525,7 @@ std::string runLocusVsCartesian(const ExperimentOptions& opt) {
       if (std::none_of(s.axes.begin(), s.axes.end(), [&](const SweepAxis& a) { return a.key == key; }))
         throw SweepError(s.file.string() + ": axes: the experiment's report needs an axis " + key);
     for (const Scenario& sc : s.runs)
-      if (!sc.map || sc.map->baseline != "cartesian")
+      if (!sc.map || sc.map->baseline != Baseline::Cartesian)
         throw SweepError(s.file.string() + ": the experiment needs map.baseline: cartesian in every run");
   };
   require(tilt, {"terrain.slope_deg", "sensor", "seed"});

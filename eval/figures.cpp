@@ -63,7 +63,7 @@ cv::Mat framePicture(const cv::Mat& picture, const std::string& title, const cv:
   return canvas;
 }
 
-Relief reliefImage(const FloatRaster& z, double cell_m) {
+Relief reliefImage(const perception::Raster<float>& z, double cell_m) {
   const int rows = int(z.rows()), cols = int(z.cols());
   float lo = std::numeric_limits<float>::max(), hi = std::numeric_limits<float>::lowest();
   for (int i = 0; i < z.size(); ++i)
@@ -103,7 +103,7 @@ Relief reliefImage(const FloatRaster& z, double cell_m) {
   return {out, lo, hi};
 }
 
-cv::Mat shadedRelief(const FloatRaster& z, double cell_m, const std::string& title) {
+cv::Mat shadedRelief(const perception::Raster<float>& z, double cell_m, const std::string& title) {
   const Relief relief = reliefImage(z, cell_m);
   const double f = std::clamp(900.0 / std::max(z.rows(), z.cols()), 0.25, 4.0);
   return frame(rescale(relief.image, f, f), title, relief.lo, relief.hi, "m", cv::COLORMAP_VIRIDIS);

@@ -10,7 +10,7 @@ namespace ambler::eval {
 
 // Hill-shaded relief (sun from the north-west, 45° up) tinted by elevation, north up; NaN cells
 // dark grey. A scale bar of elevation is drawn along the bottom.
-cv::Mat shadedRelief(const FloatRaster& z, double cell_m, const std::string& title);
+cv::Mat shadedRelief(const perception::Raster<float>& z, double cell_m, const std::string& title);
 
 // shadedRelief's picture before framing: one BGR pixel per raster cell (NaN cells dark grey), and
 // the elevations [lo, hi] its colours span.
@@ -18,7 +18,7 @@ struct Relief {
   cv::Mat image;
   double lo = 0, hi = 0;
 };
-Relief reliefImage(const FloatRaster& z, double cell_m);
+Relief reliefImage(const perception::Raster<float>& z, double cell_m);
 
 // The 256 colours of an OpenCV colour map (cv::COLORMAP_*) as a 1×256 BGR image.
 cv::Mat colourRamp(int colormap);

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "sim/atomic_file.hpp"
+#include "base/atomic_file.hpp"
 
 namespace ambler::eval {
 
@@ -24,21 +24,21 @@ std::string encode(const std::filesystem::path& path, const char* ext, const cv:
 }  // namespace
 
 void writeText(const std::filesystem::path& path, const std::string& text) {
-  sim::writeFileAtomic(path, text);
+  base::writeFileAtomic(path, text);
 }
 
 void writeJson(const std::filesystem::path& path, const nlohmann::ordered_json& json) {
-  sim::writeFileAtomic(path, json.dump(2) + "\n");
+  base::writeFileAtomic(path, json.dump(2) + "\n");
 }
 
-void writeTiff(const std::filesystem::path& path, const FloatRaster& raster) {
+void writeTiff(const std::filesystem::path& path, const perception::Raster<float>& raster) {
   const cv::Mat m(int(raster.rows()), int(raster.cols()), CV_32FC1,
                   const_cast<float*>(raster.data()));
-  sim::writeFileAtomic(path, encode(path, ".tiff", m));
+  base::writeFileAtomic(path, encode(path, ".tiff", m));
 }
 
 void writePng(const std::filesystem::path& path, const cv::Mat& image) {
-  sim::writeFileAtomic(path, encode(path, ".png", image));
+  base::writeFileAtomic(path, encode(path, ".png", image));
 }
 
 void writePly(const std::filesystem::path& path, const std::vector<Eigen::Vector3f>& points) {
@@ -48,14 +48,14 @@ void writePly(const std::filesystem::path& path, const std::vector<Eigen::Vector
   const std::size_t head = bytes.size();
   bytes.resize(head + points.size() * 12);
   for (std::size_t i = 0; i < points.size(); ++i) std::memcpy(&bytes[head + 12 * i], points[i].data(), 12);
-  sim::writeFileAtomic(path, bytes);
+  base::writeFileAtomic(path, bytes);
 }
 
-FloatRaster readTiff(const std::filesystem::path& path) {
+perception::Raster<float> readTiff(const std::filesystem::path& path) {
   const cv::Mat m = cv::imread(path.string(), cv::IMREAD_UNCHANGED);
   if (m.empty()) throw std::runtime_error(path.string() + ": cannot read TIFF");
   if (m.type() != CV_32FC1) throw std::runtime_error(path.string() + ": not a float32 single-channel TIFF");
-  FloatRaster out(m.rows, m.cols);
+  perception::Raster<float> out(m.rows, m.cols);
   for (int r = 0; r < m.rows; ++r)
     for (int c = 0; c < m.cols; ++c) out(r, c) = m.at<float>(r, c);
   return out;

@@ -8,21 +8,21 @@
 #include <string>
 #include <vector>
 
-namespace ambler::eval {
+#include "perception/raster.hpp"
 
-using FloatRaster = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+namespace ambler::eval {
 
 void writeText(const std::filesystem::path& path, const std::string& text);
 // Pretty-printed with a trailing newline; key order as inserted.
 void writeJson(const std::filesystem::path& path, const nlohmann::ordered_json& json);
 // Single-channel float32 TIFF (NaN kept as NaN).
-void writeTiff(const std::filesystem::path& path, const FloatRaster& raster);
+void writeTiff(const std::filesystem::path& path, const perception::Raster<float>& raster);
 // PNG of an 8-bit image (grey or BGR).
 void writePng(const std::filesystem::path& path, const cv::Mat& image);
 // Binary little-endian PLY of points (float x, y, z).
 void writePly(const std::filesystem::path& path, const std::vector<Eigen::Vector3f>& points);
 
 // Reads a float32 TIFF back (for tests and tools). Throws std::runtime_error naming the file.
-FloatRaster readTiff(const std::filesystem::path& path);
+perception::Raster<float> readTiff(const std::filesystem::path& path);
 
 }  // namespace ambler::eval

@@ -61,14 +61,14 @@ nlohmann::ordered_json bandsJson(const std::vector<BandMetrics>& bands) {
 
 }  // namespace
 
-MapMetrics mapMetrics(const perception::ElevationMap& map, const sim::ElevationRaster& truth,
-                      const sim::VisibilityRaster& visibility, const Eigen::Vector3d* sensor_xyz) {
+MapMetrics mapMetrics(const perception::ElevationMap& map, const perception::ElevationMap& truth_map,
+                      const perception::Raster<std::uint8_t>& visibility, const Eigen::Vector3d* sensor_xyz) {
   const auto& grid = map.grid();
   const auto same = [&](const auto& m) { return m.rows() == grid.rows && m.cols() == grid.cols; };
-  if (!same(map.elevation()) || !same(map.sigma()) || !same(map.state()) || !same(truth) ||
-      !same(visibility))
-    throw std::invalid_argument("mapMetrics: truth and visibility must be " + std::to_string(grid.rows) +
-                                " x " + std::to_string(grid.cols) + " like the map's grid");
+  if (!truth_map.grid().sameAs(grid) || !same(visibility))
+    throw std::invalid_argument("mapMetrics: the truth must be on the map's grid (frame, placement, size) and the "
+                                "visibility " + std::to_string(grid.rows) + " x " + std::to_string(grid.cols));
+  const perception::Raster<float>& truth = truth_map.elevation();
 
   MapMetrics m;
   m.cells = grid.cells();
@@ -83,8 +83,7 @@ MapMetrics mapMetrics(const perception::ElevationMap& map, const sim::ElevationR
       const bool known = state == CellState::Known;
       BandSums* band = nullptr;
       if (sensor_xyz && std::isfinite(truth(r, c))) {
-        const Eigen::Vector2d xy = grid.center(r, c);
-        band = &bands[bandOf((Eigen::Vector3d(xy.x(), xy.y(), double(truth(r, c))) - *sensor_xyz).norm())];
+        band = &bands[bandOf((grid.worldPoint(r, c, double(truth(r, c))) - *sensor_xyz).norm())];
         band->visible += vis == sim::Visibility::Visible;
         band->known += known;
         band->covered += known && vis == sim::Visibility::Visible;

@@ -61,8 +61,8 @@ struct MapMetrics {
 // the map's grid. With `sensor_xyz` (the sensor's origin in the world) the figures are also
 // broken down by range band into `bands`. Throws std::invalid_argument when the rasters' sizes
 // differ from the map's.
-MapMetrics mapMetrics(const perception::ElevationMap& map, const sim::ElevationRaster& truth,
-                      const sim::VisibilityRaster& visibility, const Eigen::Vector3d* sensor_xyz = nullptr);
+MapMetrics mapMetrics(const perception::ElevationMap& map, const perception::ElevationMap& truth,
+                      const perception::Raster<std::uint8_t>& visibility, const Eigen::Vector3d* sensor_xyz = nullptr);
 
 // The "map" entry of metrics.json: view, cells, coverage, rms_error_m, median_abs_error_m,
 // shadow_precision, shadow_recall, within_1sigma, within_2sigma, then known, max_abs_error_m,

@@ -102,7 +102,8 @@ std::string percent(long n, long of) { return format("%.1f%%", of ? 100.0 * doub
 
 // Signed error map − truth, blue below and red above the truth; the colour scale is symmetric
 // about 0 and ends at the 99th percentile of |error| so one outlier does not wash out the rest.
-cv::Mat errorPicture(const ElevationMap& map, const sim::ElevationRaster& truth, const std::string& title) {
+cv::Mat errorPicture(const ElevationMap& map, const ElevationMap& truth_map, const std::string& title) {
+  const perception::Raster<float>& truth = truth_map.elevation();
   const int rows = map.grid().rows, cols = map.grid().cols;
   std::vector<double> abs_err;
   double sum2 = 0;
@@ -199,15 +200,15 @@ cv::Mat statePicture(const ElevationMap& map, const std::string& title) {
                              {entry("range shadow", CellState::Shadow), kShadow, true}});
 }
 
-void checkTruth(const ElevationMap& map, const sim::ElevationRaster* truth) {
-  if (truth && (truth->rows() != map.grid().rows || truth->cols() != map.grid().cols))
+void checkTruth(const ElevationMap& map, const ElevationMap* truth) {
+  if (truth && !truth->grid().sameAs(map.grid()))
     throw std::invalid_argument("map files: the ground truth is not on the map's grid");
 }
 
 }  // namespace
 
 void writeMapFiles(const std::filesystem::path& dir, const std::string& stem, const ElevationMap& map,
-                   const sim::ElevationRaster* truth, const std::string& title) {
+                   const ElevationMap* truth, const std::string& title) {
   checkTruth(map, truth);
   const auto& g = map.grid();
   writeTiff(dir / (stem + "_elevation.tiff"), map.elevation());
@@ -230,7 +231,7 @@ void writeMapFiles(const std::filesystem::path& dir, const std::string& stem, co
 }
 
 void writeCartesianFiles(const std::filesystem::path& dir, const std::string& stem, const ElevationMap& map,
-                         const sim::ElevationRaster* truth, const std::string& title) {
+                         const ElevationMap* truth, const std::string& title) {
   checkTruth(map, truth);
   writeTiff(dir / (stem + "_cartesian_elevation.tiff"), map.elevation());
   if (truth) writePng(dir / (stem + "_cartesian_error.png"), errorPicture(map, *truth, title));

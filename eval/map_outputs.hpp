@@ -19,13 +19,13 @@ namespace ambler::eval {
 // Every raster is north-up (row 0 is the cell row of largest y). Throws std::runtime_error naming
 // the file that cannot be written, std::invalid_argument when `truth` is not on the map's grid.
 void writeMapFiles(const std::filesystem::path& dir, const std::string& stem,
-                   const perception::ElevationMap& map, const sim::ElevationRaster* truth,
+                   const perception::ElevationMap& map, const perception::ElevationMap* truth,
                    const std::string& title);
 
 // The Cartesian baseline: <stem>_cartesian_elevation.tiff and, when `truth` is given,
 // <stem>_cartesian_error.png. Throws like writeMapFiles.
 void writeCartesianFiles(const std::filesystem::path& dir, const std::string& stem,
-                         const perception::ElevationMap& map, const sim::ElevationRaster* truth,
+                         const perception::ElevationMap& map, const perception::ElevationMap* truth,
                          const std::string& title);
 
 }  // namespace ambler::eval

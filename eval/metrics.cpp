@@ -4,7 +4,7 @@
 
 namespace ambler::eval {
 
-ScanMetrics scanMetrics(const sim::Scan& scan, const sim::ErimConfig& config) {
+ScanMetrics scanMetrics(const sim::Scan& scan, const perception::SensorModel& config) {
   ScanMetrics m;
   const auto& img = scan.image;
   m.rays = long(img.rows()) * img.cols();

@@ -17,7 +17,7 @@ struct ScanMetrics {
   double wrapped_fraction = 0;    // returns whose true range is beyond the ambiguity interval
 };
 
-ScanMetrics scanMetrics(const sim::Scan& scan, const sim::ErimConfig& config);
+ScanMetrics scanMetrics(const sim::Scan& scan, const perception::SensorModel& sensor);
 nlohmann::ordered_json toJson(const ScanMetrics& m, int view);
 
 }  // namespace ambler::eval

@@ -1,10 +1,11 @@
 #pragma once
-// `ambler run`: one scenario end to end, writing the run directory of SCENARIO.md.
+// `ambler run`: one scenario end to end, its stages (eval/stages.hpp) in turn, writing the run
+// directory (docs/scenario.md, "The run directory").
+#include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "eval/scenario.hpp"
-#include "sim/erim_scanner.hpp"
 
 namespace ambler::eval {
 
@@ -16,8 +17,6 @@ struct RunOptions {
 // Runs the scenario and returns the metrics it also writes to out/metrics.json.
 // Throws std::runtime_error (or ScenarioError) naming the file or the cause.
 nlohmann::ordered_json runScenario(const Scenario& scenario, const RunOptions& options);
-
-sim::ErimConfig erimConfig(const SensorSpec& sensor);
 
 // The seed of view `k`'s scan noise: independent of the terrain's streams.
 std::uint64_t viewSeed(std::uint64_t seed, int view);

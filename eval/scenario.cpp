@@ -173,11 +173,11 @@ terrains::TerrainSpec readTerrain(const Reader& reader, const YAML::Node& node,
   return t;
 }
 
-SensorSpec readSensor(const Reader& reader, const YAML::Node& node) {
+perception::SensorModel readSensor(const Reader& reader, const YAML::Node& node) {
   const Fields f(reader, node, "sensor",
                  {"rows", "cols", "fov_deg", "noise_k", "quantization_m", "ambiguity_m",
                   "mixed_pixels", "max_range_m", "beam_divergence_deg", "dropout"});
-  SensorSpec s;
+  perception::SensorModel s;
   s.rows = f.integer("rows", 1, 4096, s.rows);
   s.cols = f.integer("cols", 1, 16384, s.cols);
   if (const auto fov = f.numbers<2>("fov_deg", {0.0, 180.0, true, true})) {
@@ -234,8 +234,10 @@ MapSpec readMap(const Reader& reader, const YAML::Node& node) {
   checkGridSize(reader, f.pathOf("cell_m"), std::ceil((m.x_m[1] - m.x_m[0]) / m.cell_m),
                 std::ceil((m.y_m[1] - m.y_m[0]) / m.cell_m));
   m.epsilon_rad = f.number("epsilon_rad", kPositive, m.epsilon_rad);
-  m.shadows = f.choice("shadows", {"gnc", "none"}, m.shadows);
-  m.baseline = f.choice("baseline", {"cartesian", "none"}, m.baseline);
+  m.shadows = f.choice("shadows", {"gnc", "none"}, shadowsName(m.shadows)) == "gnc" ? perception::ShadowMethod::Gnc
+                                                                                     : perception::ShadowMethod::None;
+  m.baseline = f.choice("baseline", {"cartesian", "none"}, baselineName(m.baseline)) == "cartesian" ? Baseline::Cartesian
+                                                                                                   : Baseline::None;
   return m;
 }
 
@@ -265,6 +267,20 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
 }
 
 }  // namespace
+
+const char* shadowsName(perception::ShadowMethod m) { return m == perception::ShadowMethod::Gnc ? "gnc" : "none"; }
+const char* baselineName(Baseline b) { return b == Baseline::Cartesian ? "cartesian" : "none"; }
+
+perception::MapGrid MapSpec::grid() const {
+  return perception::MapGrid::covering(x_m[0], x_m[1], y_m[0], y_m[1], cell_m);
+}
+
+perception::ScanToMapConfig MapSpec::scanToMapConfig() const {
+  perception::ScanToMapConfig c;
+  c.shadows = shadows;
+  c.locus.epsilon_rad = epsilon_rad;
+  return c;
+}
 
 Scenario parseScenario(const std::string& yaml_text, const fs::path& file) {
   const Reader reader(file.empty() ? "<string>" : file.string());

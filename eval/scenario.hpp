@@ -10,6 +10,9 @@
 #include <string_view>
 #include <vector>
 
+#include "perception/map_grid.hpp"
+#include "perception/scan_to_map.hpp"
+#include "perception/sensor_model.hpp"
 #include "terrains/terrain.hpp"
 
 namespace ambler::eval {
@@ -20,32 +23,30 @@ class ScenarioError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-struct SensorSpec {
-  int rows = 64;
-  int cols = 256;
-  double fov_v_rad = 30.0 * 3.14159265358979323846 / 180.0;
-  double fov_h_rad = 80.0 * 3.14159265358979323846 / 180.0;
-  double noise_k = 0.0003;          // σ_ρ = noise_k · ρ² (ρ in m); 0 = off
-  double quantization_m = 0.0762;   // 0 = off
-  double ambiguity_m = 19.5;        // 0 = off
-  bool mixed_pixels = true;
-  double max_range_m = 40.0;
-  double beam_divergence_rad = 0.0; // full angle of the beam footprint; 0 = one pixel's spacing
-  double dropout = 0.0;             // probability that a pixel returns nothing
-};
 
 struct ViewSpec {
   Eigen::Vector3d xyz_m = Eigen::Vector3d::Zero();
   Eigen::Vector3d rpy_rad = Eigen::Vector3d::Zero();  // roll, pitch, yaw
 };
 
+// The map a scenario compares the locus map with.
+enum class Baseline : std::uint8_t { None, Cartesian };
+
+// The YAML words of the closed sets (as in docs/scenario.md).
+const char* shadowsName(perception::ShadowMethod m);
+const char* baselineName(Baseline b);
+
 struct MapSpec {
   double cell_m = 0.10;
   Eigen::Vector2d x_m{-5.0, 5.0};
   Eigen::Vector2d y_m{-3.0, 8.0};
   double epsilon_rad = 1.0e-5;
-  std::string shadows = "gnc";      // gnc | none
-  std::string baseline = "cartesian";  // cartesian | none
+  perception::ShadowMethod shadows = perception::ShadowMethod::Gnc;  // gnc | none
+  Baseline baseline = Baseline::Cartesian;                           // cartesian | none
+
+  // The grid of the map region (in the world frame), and what the map stage asks of scanToMap.
+  perception::MapGrid grid() const;
+  perception::ScanToMapConfig scanToMapConfig() const;
 };
 
 struct Scenario {
@@ -54,7 +55,7 @@ struct Scenario {
   std::string description;          // free text; "" when absent
   std::uint64_t seed = 0;
   terrains::TerrainSpec terrain;
-  SensorSpec sensor;
+  perception::SensorModel sensor;
   std::vector<ViewSpec> views;
   std::optional<MapSpec> map;       // absent: no maps
 };

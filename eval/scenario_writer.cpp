@@ -31,7 +31,7 @@ bool sameBits(double a, double b) {
 
 namespace scenario_detail {
 
-// The same expression as SensorSpec's defaults (deg·π/180), so `fov_deg: [30, 80]` gives exactly
+// The same expression as perception::SensorModel's defaults (deg·π/180), so `fov_deg: [30, 80]` gives exactly
 // the default radians.
 double degToRad(double deg) { return deg * std::numbers::pi / 180.0; }
 
@@ -158,8 +158,8 @@ std::string resolvedYaml(const Scenario& s) {
     y += "  region: {x_m: " + list({num(m.x_m[0]), num(m.x_m[1])}) +
          ", y_m: " + list({num(m.y_m[0]), num(m.y_m[1])}) + "}\n";
     y += "  epsilon_rad: " + num(m.epsilon_rad) + "\n";
-    y += "  shadows: " + m.shadows + "\n";
-    y += "  baseline: " + m.baseline + "\n";
+    y += std::string("  shadows: ") + shadowsName(m.shadows) + "\n";
+    y += std::string("  baseline: ") + baselineName(m.baseline) + "\n";
   }
   return y;
 }

@@ -19,15 +19,16 @@ constexpr float kNaNf = std::numeric_limits<float>::quiet_NaN();
 void checkGrid(const MapGrid& grid) {
   if (grid.rows <= 0 || grid.cols <= 0 || !(grid.cell > 0.0) || !std::isfinite(grid.cell))
     throw std::invalid_argument("cartesianMap: the map grid is empty or its cell size is not > 0");
+  if (!grid.gravityAligned()) throw std::invalid_argument("cartesianMap: the map frame is not gravity-aligned");
 }
 
 // `grid` grown by `pad` cells on every side.
 MapGrid padded(const MapGrid& grid, int pad) {
   return {grid.x_min - pad * grid.cell, grid.y_max + pad * grid.cell, grid.cell, grid.rows + 2 * pad,
-          grid.cols + 2 * pad};
+          grid.cols + 2 * pad, grid.T_WM};
 }
 
-using Mask = Eigen::Matrix<bool, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+using Mask = Raster<bool>;
 
 // Nearest marked cell of every cell, exact in the Euclidean metric: for each column the nearest
 // marked row (two sweeps), then per row the lower envelope of the parabolas (c − c')² + Δr(c')²
@@ -160,8 +161,11 @@ CartesianBins binPadded(const RangeImage& image, const MapGrid& unpadded, int pa
   for (int r = 0; r < rows; ++r) sin_phi[r] = std::sin(image.phi[r]), cos_phi[r] = std::cos(image.phi[r]);
   for (int c = 0; c < cols; ++c)
     sin_theta[c] = std::sin(image.theta[c]), cos_theta[c] = std::cos(image.theta[c]);
-  const Eigen::Matrix3d R = image.T_WS.linear();
-  const Eigen::Vector3d t = image.T_WS.translation();
+  // The sensor's pose in the map frame (the world's bits when the frame is the world).
+  const Eigen::Isometry3d T_MS =
+      grid.inWorldFrame() ? image.T_WS : Eigen::Isometry3d(grid.T_WM.inverse() * image.T_WS);
+  const Eigen::Matrix3d R = T_MS.linear();
+  const Eigen::Vector3d t = T_MS.translation();
 
   struct Sums {  // z about the cell's first z, so that the spread needs no cancelling of large sums
     int n = 0;

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "perception/raster.hpp"
 #include "perception/elevation_map.hpp"
 #include "perception/range_image.hpp"
 
@@ -26,15 +27,12 @@ struct CartesianConfig {
   double max_gap_m = 0.5;
 };
 
-using CountRaster = Eigen::Matrix<std::int32_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-using PointRaster = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
 // What eq. 1 puts into each cell before any gap is filled (world frame, metres). Where a cell has
 // no point, count is 0 and the other layers are NaN.
 struct CartesianBins {
-  CountRaster count;                    // points in the cell
-  PointRaster mean_x, mean_y, mean_z;   // centroid of the cell's points
-  PointRaster sem_z;                    // standard error of mean_z; NaN below two points
+  Raster<std::int32_t> count;                    // points in the cell
+  Raster<double> mean_x, mean_y, mean_z;   // centroid of the cell's points
+  Raster<double> sem_z;                    // standard error of mean_z; NaN below two points
 };
 
 // Bins every valid (finite) pixel of `image` into `grid` by the cell containing its world (x, y),

@@ -10,10 +10,10 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 ElevationMap::ElevationMap(const MapGrid& grid)
     : grid_(grid),
-      z_(MapRaster::Constant(grid.rows, grid.cols, kNaN)),
-      sigma_(MapRaster::Constant(grid.rows, grid.cols, kNaN)),
-      ceiling_(MapRaster::Constant(grid.rows, grid.cols, kNaN)),
-      state_(StateRaster::Constant(grid.rows, grid.cols, std::uint8_t(CellState::Unseen))) {}
+      z_(Raster<float>::Constant(grid.rows, grid.cols, kNaN)),
+      sigma_(Raster<float>::Constant(grid.rows, grid.cols, kNaN)),
+      ceiling_(Raster<float>::Constant(grid.rows, grid.cols, kNaN)),
+      state_(Raster<std::uint8_t>::Constant(grid.rows, grid.cols, std::uint8_t(CellState::Unseen))) {}
 
 void ElevationMap::setKnown(int r, int c, float z, float sigma) {
   z_(r, c) = z;

@@ -1,11 +1,13 @@
 #pragma once
-// An elevation map: a gravity-aligned grid (perception::MapGrid, north-up) with named layers —
-// elevation, σ_z, state, and the shadow ceiling. Unknown elevation is NaN *and* a state (unseen
-// or range shadow).
+// An elevation map: a grid in a gravity-aligned map frame (perception::MapGrid: T_WM, north-up)
+// with named layers — elevation, σ_z, state, and the shadow ceiling — all heights along the map
+// frame's z. Unknown elevation is NaN *and* a state (unseen or range shadow). Ground truth is an
+// ElevationMap too (sim::GroundTruth: known cells with σ_z = 0).
 #include <Eigen/Core>
 #include <cstdint>
 #include <optional>
 
+#include "perception/raster.hpp"
 #include "perception/map_grid.hpp"
 
 namespace ambler::perception {
@@ -18,9 +20,6 @@ enum class CellState : std::uint8_t {
                // below the shadow ceiling where there is one
 };
 
-using MapRaster = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-using StateRaster = Eigen::Matrix<std::uint8_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
 class ElevationMap {
  public:
   ElevationMap() = default;
@@ -28,24 +27,26 @@ class ElevationMap {
   explicit ElevationMap(const MapGrid& grid);
 
   const MapGrid& grid() const { return grid_; }
-  MapRaster& elevation() { return z_; }
-  const MapRaster& elevation() const { return z_; }
-  MapRaster& sigma() { return sigma_; }
-  const MapRaster& sigma() const { return sigma_; }
-  StateRaster& state() { return state_; }
-  const StateRaster& state() const { return state_; }
+  const Eigen::Isometry3d& T_WM() const { return grid_.T_WM; }
+  Raster<float>& elevation() { return z_; }
+  const Raster<float>& elevation() const { return z_; }
+  Raster<float>& sigma() { return sigma_; }
+  const Raster<float>& sigma() const { return sigma_; }
+  Raster<std::uint8_t>& state() { return state_; }
+  const Raster<std::uint8_t>& state() const { return state_; }
   // Per shadow cell, the height its terrain is known to lie below: where the lowest sampled ray
   // that passes over the cell crosses its vertical line (docs/locus.md). NaN elsewhere, and in a
   // shadow cell that no sampled ray passes over.
-  MapRaster& shadowCeiling() { return ceiling_; }
-  const MapRaster& shadowCeiling() const { return ceiling_; }
+  Raster<float>& shadowCeiling() { return ceiling_; }
+  const Raster<float>& shadowCeiling() const { return ceiling_; }
 
   CellState stateAt(int r, int c) const { return CellState(state_(r, c)); }
   void setKnown(int r, int c, float z, float sigma);
   void setUnknown(int r, int c, CellState why);  // Unseen or Shadow (without a ceiling)
   void setShadow(int r, int c, float ceiling);
 
-  // The elevation / σ of the cell containing (x, y); nullopt outside the grid or not known.
+  // The elevation / σ of the cell containing (x, y) of the map frame; nullopt outside the grid or
+  // not known.
   std::optional<double> elevationAt(double x, double y) const;
   std::optional<double> sigmaAt(double x, double y) const;
   CellState stateAt(double x, double y) const;
@@ -54,8 +55,8 @@ class ElevationMap {
 
  private:
   MapGrid grid_;
-  MapRaster z_, sigma_, ceiling_;
-  StateRaster state_;
+  Raster<float> z_, sigma_, ceiling_;
+  Raster<std::uint8_t> state_;
 };
 
 }  // namespace ambler::perception

@@ -81,13 +81,13 @@ Sample LocusMapper::evaluate(const Line& l, double rf, double sp, double cp, dou
   const double lambda = (l.a.y() + out.s * l.b.y()) * cp + (l.a.z() + out.s * l.b.z()) * sp;
   if (!(lambda > 0)) return out;  // behind the sensor
   out.rho = std::sqrt(x * x + lambda * lambda);
-  out.cf = column_of_(x / lambda);
-  const double cf = out.cf;
-  if (!(cf >= 0.0 && cf <= last_col_) || !(rf >= 0.0 && rf <= last_row_)) return out;
+  out.column = column_of_(x / lambda);
+  const double column = out.column;
+  if (!(column >= 0.0 && column <= last_col_) || !(rf >= 0.0 && rf <= last_row_)) return out;
   out.r0 = std::min(int(rf), rows_ - 2);
-  out.c0 = std::min(int(cf), cols_ - 2);
+  out.c0 = std::min(int(column), cols_ - 2);
   out.fr = rf - out.r0;
-  out.fc = cf - out.c0;
+  out.fc = column - out.c0;
   const float* px = image_.range.data() + std::size_t(out.r0) * cols_ + out.c0;
   const unsigned flags = cell_flags_[cellIndex(out.r0, out.c0)];
   const double gr = 1 - out.fr, gc = 1 - out.fc;
@@ -146,14 +146,14 @@ Sample LocusMapper::atRow(const Line& l, int r) const {
   const double lambda = (l.a.y() + out.s * l.b.y()) * cp + (l.a.z() + out.s * l.b.z()) * sp;
   if (!(lambda > 0)) return out;
   out.rho = std::sqrt(x * x + lambda * lambda);
-  const double cf = column_of_(x / lambda);
-  out.cf = cf;
-  if (!(cf >= 0.0 && cf <= last_col_)) return out;
+  const double column = column_of_(x / lambda);
+  out.column = column;
+  if (!(column >= 0.0 && column <= last_col_)) return out;
   const bool bottom = r == rows_ - 1;  // the last scanline: the bottom row of the cell above it
   out.r0 = bottom ? r - 1 : r;
   out.fr = bottom ? 1.0 : 0.0;
-  out.c0 = std::min(int(cf), cols_ - 2);
-  out.fc = cf - out.c0;
+  out.c0 = std::min(int(column), cols_ - 2);
+  out.fc = column - out.c0;
   const float* px = image_.range.data() + std::size_t(r) * cols_ + out.c0;
   const unsigned flags = cell_flags_[cellIndex(out.r0, out.c0)];
   const unsigned used = (bottom ? 12u : 3u) & ((out.fc != 1.0 ? 5u : 0u) | (out.fc != 0.0 ? 10u : 0u));
@@ -378,7 +378,7 @@ LocusHit LocusMapper::intersect(const Eigen::Vector3d& u, const Eigen::Vector3d&
                           slopeInPatch(line, r1, phi_hi, r2, hi, r_cell, s2.c0));
     } else if (std::abs(s1.c0 - s2.c0) == 1) {
       const int boundary = std::max(s1.c0, s2.c0);
-      const double phi_b = phi_lo + (boundary - s1.cf) / (s2.cf - s1.cf) * (phi_hi - phi_lo);
+      const double phi_b = phi_lo + (boundary - s1.column) / (s2.column - s1.column) * (phi_hi - phi_lo);
       if ((phi_b - phi_lo) * (phi_b - phi_hi) < 0) {
         if (!take(phi_b, eval(phi_b))) return hit;  // a pixel without a return: unknown
         // The side of the boundary the bracket is now on: its scanline end's patch.
@@ -432,7 +432,7 @@ double LocusMapper::slopeInPatch(const Line& l, int r1, double phi_m, int r_m, c
   const float* px = image_.range.data() + std::size_t(r_cell) * cols_ + c_cell;
   const double p00 = px[0], p01 = px[1], p10 = px[cols_], p11 = px[cols_ + 1];
   const double fr = r_m >= 0 ? double(r_m - r_cell) : (phi0_ - phi_m) * inv_dphi_ - r_cell;
-  const double fc = m.cf - c_cell;  // = m.fc where m is in that cell
+  const double fc = m.column - c_cell;  // = m.fc where m is in that cell
   const double top = (1 - fc) * p00 + fc * p01, bottom = (1 - fc) * p10 + fc * p11;
   return slope(l, sp, cp, inv_den, m, bottom - top, (1 - fr) * (p01 - p00) + fr * (p11 - p10));
 }
@@ -512,9 +512,8 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   // The extension's range errs by σ_ext = σ_p·√(1/n + (t + k̄)²/S_kk) (σ_p at the near surface's
   // range); the near surface gets one σ_ext more, so that noise rarely puts a visible lip top into
   // the shadow (each σ_ext more costs shadow recall: docs/locus.md has the trade's figures).
-  const double na = 1 / (sy / n), noise = config_.noise_k * na * na;
-  const double sigma_ext =
-      std::sqrt((noise * noise + quantization_var_) * (1.0 / n + (t_near + k_mean) * (t_near + k_mean) / s_kk));
+  const double sigma_ext = std::sqrt(legacyVar(1 / (sy / n)) *
+                                     (1.0 / n + (t_near + k_mean) * (t_near + k_mean) / s_kk));
   if (!(inv_near > 0) || lineAt(n0 - t_near * d) < 1 / inv_near + sigma_ext) return true;
   // The far surface: last clean sample at f0, range a, the sample past it b.
   const int f0 = far_mixed ? r1 - d : r1;
@@ -548,9 +547,8 @@ bool LocusMapper::linkedMixedPixel(int r1, int r2, const Sample& s1, const Sampl
   if (!std::isfinite(i_m) || !std::isfinite(i1) || !std::isfinite(i2)) return false;
   const double inv = 2 / i1 - 1 / i2;  // the other surface's inverse range extrapolated to m
   if (!(inv > 0)) return false;
-  const double noise = config_.noise_k * i_m * i_m;
   const double departure = (i_m - 1 / inv) * (far_side ? 1.0 : -1.0);  // towards the first surface
-  return departure > 3 * std::sqrt(6 * (noise * noise + quantization_var_));
+  return departure > 3 * std::sqrt(6 * legacyVar(i_m));
 }
 
 bool LocusMapper::clearAbove(const Line& l, double s_top, int r1, const Sample& s1) const {
@@ -562,7 +560,7 @@ bool LocusMapper::clearAbove(const Line& l, double s_top, int r1, const Sample& 
   const auto column = [&](const Eigen::Vector3d& p) {
     return column_of_(p.x() / std::sqrt(p.y() * p.y() + p.z() * p.z()));
   };
-  double c_min = s1.cf, c_max = s1.cf;
+  double c_min = s1.column, c_max = s1.column;
   const double c_top = column(top);
   c_min = std::min(c_min, c_top), c_max = std::max(c_max, c_top);
   const double ab = l.a.dot(l.b), den = l.b.x() * ab - l.a.x();
@@ -574,8 +572,8 @@ bool LocusMapper::clearAbove(const Line& l, double s_top, int r1, const Sample& 
     }
   }
   if (!(c_min > -2.0 && c_max < cols_ + 1.0)) return false;  // also NaN
-  // The pixels a scanline's interpolation can read there (c0 = ⌊cf⌋ and c0 + 1), widened by far
-  // more than the column tables' error (1.3e-10 rad) in case it moves cf across a pixel boundary.
+  // The pixels a scanline's interpolation can read there (c0 = ⌊column⌋ and c0 + 1), widened by far
+  // more than the column tables' error (1.3e-10 rad) in case it moves column across a pixel boundary.
   const int c_lo = std::max(0, int(std::floor(c_min - 1e-6))), c_hi = std::min(cols_ - 1, int(std::floor(c_max + 1e-6)) + 1);
   if (c_lo > c_hi) return true;  // the segment is beside the image: nothing above is seen
   const int k = 31 - __builtin_clz(unsigned(c_hi - c_lo + 1));
@@ -627,8 +625,7 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
     int rc = r1;
     Sample sc = s1;
     for (int k = 0; k < 4 && sc.valid; ++k) {
-      const double seen = sc.rho - sc.delta, noise = config_.noise_k * seen * seen;
-      if (sc.delta < -3 * std::sqrt(noise * noise + quantization_var_)) break;
+      if (sc.delta < -3 * std::sqrt(legacyVar(sc.rho - sc.delta))) break;
       rc -= r2 - r1;
       sc = rc >= 0 && rc < rows_ ? atRow(line, rc) : Sample{};
       if (sc.valid && !(sc.delta < 0)) sc.valid = false;
@@ -641,15 +638,17 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   hit.point = u + hit.s * v;
   hit.phi = phi;
   // Where the point is in the image: in the 2×2 cell between the bracket's two scanlines.
-  const double cf = lo.cf + t * (hi.cf - lo.cf);
-  const int r_cell = std::min(r1, r2), c_cell = std::clamp(int(cf), 0, cols_ - 2);
-  hit.theta = theta0_ + dtheta_ * cf;
+  const double column = lo.column + t * (hi.column - lo.column);
+  const int r_cell = std::min(r1, r2), c_cell = std::clamp(int(column), 0, cols_ - 2);
+  hit.theta = theta0_ + dtheta_ * column;
   hit.rho = lo.rho + t * (hi.rho - lo.rho);
   hit.sigma = sigmaAlongLine(r_cell, c_cell, std::clamp((phi0_ - phi) * inv_dphi_ - r_cell, 0.0, 1.0),
-                             std::clamp(cf - c_cell, 0.0, 1.0), hit.rho, line.a + hit.s * line.b, line.b);
+                             std::clamp(column - c_cell, 0.0, 1.0), hit.rho, line.a + hit.s * line.b, line.b);
 }
 
 ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
+  if (grid.T_WM.matrix() != T_WM_.matrix())
+    throw std::invalid_argument("LocusMapper::map: the grid is not in the mapper's map frame");
   ElevationMap out(grid);
   std::atomic<long> by_lanes{0};
   const Eigen::Vector3d v = Eigen::Vector3d::UnitZ();
@@ -708,7 +707,7 @@ ElevationMap LocusMapper::mapPolygon(const std::vector<Eigen::Vector2d>& polygon
   if (polygon.size() < 3) throw std::invalid_argument("LocusMapper::mapPolygon: needs at least 3 vertices");
   Eigen::AlignedBox2d box;
   for (const auto& p : polygon) box.extend(p);
-  const MapGrid grid = MapGrid::covering(box.min().x(), box.max().x(), box.min().y(), box.max().y(), cell_m);
+  const MapGrid grid = MapGrid::covering(box.min().x(), box.max().x(), box.min().y(), box.max().y(), cell_m, T_WM_);
   ElevationMap out(grid);
   tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& rows) {
     for (int r = rows.begin(); r != rows.end(); ++r)

@@ -13,6 +13,7 @@
 #include "perception/elevation_map.hpp"
 #include "perception/range_edges.hpp"
 #include "perception/range_image.hpp"
+#include "perception/sensor_model.hpp"
 
 namespace ambler::perception {
 
@@ -20,8 +21,7 @@ struct LocusConfig {
   double epsilon_rad = 1e-5;  // the search stops when the bracket in φ is narrower than this
   bool bisection = false;     // true: plain bisection as in the paper; false: Hermite, IQI steps
                               // (the same bracket and stopping rule, fewer evaluations)
-  double noise_k = 3e-4;      // σ_ρ = k·ρ² of the sensor, for σ along the line
-  double quantization_m = 0.0762;  // adds q²/12 to the range variance; 0 = none
+  SensorModel sensor;         // its σ_ρ (SensorModel::rangeVariance) gives σ along the line
   double z_margin_m = 0.3;    // lines are searched within the returns' bounds ± this margin (docs/locus.md)
   bool roughness = true;      // σ includes the surface's roughness between pixels (docs/locus.md)
   double roughness_hurst = 0.7;  // H of the fBm assumed between pixels (0.5: Brownian)
@@ -44,8 +44,22 @@ struct LocusHit {
 
 struct LocusSample;
 
+
 // The SIMD lanes maps run their common case in (LocusMapper::laneIsa).
 enum class LaneIsa { None = 0, Avx2 = 1, Avx512 = 2 };
+
+// Caps the lanes every mapper of the process runs (LocusMapper::laneIsa) while it lives, and
+// restores the cap before it when it goes out of scope. Not for concurrent use from two threads.
+class LaneIsaCap {
+ public:
+  explicit LaneIsaCap(LaneIsa cap);
+  ~LaneIsaCap();
+  LaneIsaCap(const LaneIsaCap&) = delete;
+  LaneIsaCap& operator=(const LaneIsaCap&) = delete;
+
+ private:
+  LaneIsa previous_;
+};
 
 class LocusMapper {
  public:
@@ -53,9 +67,12 @@ class LocusMapper {
   // once per image and in parallel, what every search needs per 2×2 pixel cell (which pixels
   // returned, which are edge pixels, the local normal and roughness of σ). Throws
   // std::invalid_argument if the image's scan angles are not evenly spaced or sizes differ.
-  LocusMapper(const RangeImage& image, const EdgeMask* edges, const LocusConfig& config = {});
+  // The mapper works in the gravity-aligned map frame T_WM (default: the world): lines, points
+  // and maps are in M.
+  LocusMapper(const RangeImage& image, const Raster<std::uint8_t>* edges, const LocusConfig& config = {},
+              const Eigen::Isometry3d& T_WM = Eigen::Isometry3d::Identity());
 
-  // f(u, v): where the line u + s·v (world frame, v unit, pointing away from the ground: the
+  // f(u, v): where the line u + s·v (map frame, v unit, pointing away from the ground: the
   // search runs from +v towards −v) meets the surface the sensor saw. Thread-safe.
   LocusHit intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const;
 
@@ -67,17 +84,18 @@ class LocusMapper {
   // A map on `grid`: vertical lines through the cell centres, in parallel over rows. Each group of
   // kLanes cells of a map row starts its scanline search at the last bracket found in the groups
   // before it (docs/locus.md); the map does not depend on the ISA or the number of threads.
-  // lane_cells, if given, receives how many cells the SIMD lanes completed.
+  // lane_cells, if given, receives how many cells the SIMD lanes completed. Throws
+  // std::invalid_argument if the grid's frame is not the mapper's.
   ElevationMap map(const MapGrid& grid, long* lane_cells = nullptr) const;
 
   static constexpr int kLanes = 8;  // map cells per group (one AVX-512 batch, or two AVX2 ones)
   // The lanes this process runs: AVX-512 (F and DQ) where the CPU and OS support it, else AVX2,
-  // else none — at most the cap (for tests: the results are the same bits at every setting).
+  // else none — at most the cap of the innermost LaneIsaCap alive (for tests and benchmarks: the
+  // results are the same bits at every setting).
   static LaneIsa laneIsa();
-  static void capLaneIsa(LaneIsa cap);
   static bool lanesAvailable() { return laneIsa() != LaneIsa::None; }
 
-  // The map at resolution `cell_m` inside a polygon (x, y vertices, world frame): the grid covers
+  // The map at resolution `cell_m` inside a polygon (x, y vertices, map frame): the grid covers
   // the polygon's bounding box; cells whose centre is outside the polygon stay Unseen.
   ElevationMap mapPolygon(const std::vector<Eigen::Vector2d>& polygon, double cell_m) const;
 
@@ -178,11 +196,13 @@ class LocusMapper {
   void finish(const Line& l, const Eigen::Vector3d& u, const Eigen::Vector3d& v, int r1, int r2,
               const LocusSample& s1, const LocusSample& s2, double phi_lo, const LocusSample& lo,
               double phi_hi, const LocusSample& hi, LocusHit& hit) const;
+  double legacyVar(double rho) const { const double n = config_.sensor.noise_k * rho * rho; return n * n + quantization_var_; }  // LEGACY
   int cellIndex(int r0, int c0) const { return r0 * (cols_ - 1) + c0; }
 
   const RangeImage& image_;
-  const EdgeMask* edges_;
+  const Raster<std::uint8_t>* edges_;
   LocusConfig config_;
+  Eigen::Isometry3d T_WM_;  // the map frame
   Eigen::Matrix3d rot_SW_;    // T_SW = T_WS⁻¹: rotation
   Eigen::Vector3d trans_SW_;  // and translation
   Eigen::Vector3d up_;  // world z in the sensor frame
@@ -190,7 +210,7 @@ class LocusMapper {
   std::vector<double> roughness_g_;  // the fBm interpolation factor, tabulated over f
   double phi0_, dphi_, theta0_, dtheta_;
   double inv_dtheta_, inv_dphi_;
-  double quantization_var_;  // q²/12
+  double quantization_var_;  // config_.sensor.quantizationVariance(), for the lanes
   double last_row_, last_col_;  // rows − 1 and cols − 1: the largest fractional row and column
   std::vector<double> sin_phi_, cos_phi_, sin_theta_, cos_theta_;
   AngleTable column_of_;  // over tan θ

@@ -12,8 +12,8 @@ struct LocusSample {
   unsigned edges = 0;   // bit k: pixel k (of the 2×2 cell, weighted) is an occluding-edge pixel
   int r0, c0;           // the top-left pixel of the 2×2 cell
   double delta, s, rho;
-  double cf;            // the column coordinate (θ − θ0)/Δθ
-  double fr, fc;        // the position inside the cell: bilinear weights (1−fr)(1−fc), (1−fr)fc, …
+  double column;        // the fractional column coordinate (θ − θ0)/Δθ
+  double fr, fc;        // the fractions of a pixel past (r0, c0): bilinear weights (1−fr)(1−fc), (1−fr)fc, …
   // (The numbers are set wherever `valid` is; left uninitialised, as they are written in the hot
   // loop of every search.)
 };

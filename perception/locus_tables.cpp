@@ -116,8 +116,9 @@ inline double roughnessVariance(double mean_d2, double f, double var_pixel, cons
 
 }  // namespace
 
-LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const LocusConfig& config)
-    : image_(image), edges_(edges), config_(config), rows_(image.rows()),
+LocusMapper::LocusMapper(const RangeImage& image, const Raster<std::uint8_t>* edges, const LocusConfig& config,
+                         const Eigen::Isometry3d& T_WM)
+    : image_(image), edges_(edges), config_(config), T_WM_(T_WM), rows_(image.rows()),
       cols_(image.cols()) {
   if (rows_ < 2 || cols_ < 2)
     throw std::invalid_argument("LocusMapper: the range image needs at least 2x2 pixels");
@@ -129,7 +130,11 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   dtheta_ = image.theta[1] - image.theta[0];
   if (!(dphi_ > 0) || !(dtheta_ > 0) || !checkEven(image.phi, -dphi_) || !checkEven(image.theta, dtheta_))
     throw std::invalid_argument("LocusMapper: scan angles must be evenly spaced, φ falling, θ rising");
-  const Eigen::Isometry3d T_SW = image.T_WS.inverse();
+  // The sensor's pose in the map frame M; M is the world when T_WM is the identity (then nothing
+  // is multiplied, so the bits are those of the world-frame mapper).
+  if (!isGravityAligned(T_WM)) throw std::invalid_argument("LocusMapper: the map frame is not gravity-aligned");
+  const Eigen::Isometry3d T_MS = isWorldFrame(T_WM) ? image.T_WS : Eigen::Isometry3d(T_WM.inverse() * image.T_WS);
+  const Eigen::Isometry3d T_SW = T_MS.inverse();
   rot_SW_ = T_SW.linear();
   trans_SW_ = T_SW.translation();
   // World z in the sensor frame, summed as lineOf sums R·v (lineOf returns it for vertical lines).
@@ -151,7 +156,7 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   }
   inv_dtheta_ = 1.0 / dtheta_;
   inv_dphi_ = 1.0 / dphi_;
-  quantization_var_ = config.quantization_m * config.quantization_m / 12.0;
+  quantization_var_ = config.sensor.quantization_m * config.sensor.quantization_m / 12.0;  // LEGACY
   last_row_ = rows_ - 1;
   last_col_ = cols_ - 1;
   column_of_ = AngleTable(true, 3.0, theta0_, inv_dtheta_);  // |θ| ≤ 71.6°
@@ -163,7 +168,7 @@ LocusMapper::LocusMapper(const RangeImage& image, const EdgeMask* edges, const L
   }
   const PixelTables pixels(image, sin_phi_, cos_phi_, sin_theta_, cos_theta_);
   for (std::size_t i = 0; i < pixels.point.size(); ++i)
-    if (pixels.returned[i]) bounds_.extend(image.T_WS * pixels.point[i]);
+    if (pixels.returned[i]) bounds_.extend(T_MS * pixels.point[i]);
   if (!bounds_.isEmpty()) {
     bounds_.min().array() -= config.z_margin_m;
     bounds_.max().array() += config.z_margin_m;
@@ -242,8 +247,7 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   // Σw² of the bilinear weights factorises: ((1−fr)² + fr²)·((1−fc)² + fc²).
   const double gr = 1 - fr, gc = 1 - fc;
   const double sum_w2 = (gr * gr + fr * fr) * (gc * gc + fc * fc);
-  const double noise = config_.noise_k * rho * rho;
-  const double var_pixel = noise * noise + quantization_var_;
+  const double var_pixel = legacyVar(rho);
   const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
   const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
                        roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data());

@@ -83,10 +83,12 @@ struct Penalty {
   }
 };
 
-// The noise of u = 1/ρ: σ_u = σ(ρ)/ρ² = σ_q·u² + k.
+// The noise of u = 1/ρ: σ_u = σ_ρ/ρ² = √(k² + σ_q²·u⁴), with σ_ρ² = (k·ρ²)² + σ_q² the sensor
+// model's (SensorModel::rangeVariance) in single precision.
 struct NoiseU {
   float sq, k;
-  float sigma(float u) const { return sq * u * u + k; }
+  explicit NoiseU(const SensorModel& s) : sq(float(std::max(s.quantization_m, 1e-3) / std::sqrt(12.0))), k(float(s.noise_k)) {}  // LEGACY
+  float sigma(float u) const { return sq * u * u + k; }  // LEGACY
 };
 
 // B&Z's SOR step f ← f − ω·(∂E/∂f)/T on n pixels `fo` of one colour: the data term (f − u)²/σ_u²,
@@ -219,19 +221,14 @@ void requireConfig(bool ok, const char* what) {
 
 }  // namespace
 
-double RangeNoise::sigma(double rho) const {
-  return quantization_m / std::sqrt(12.0) + k * rho * rho;
-}
-
-EdgeMask detectRangeEdges(const RangeImage& image, const GncConfig& config) {
+Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& config) {
   requireConfig(config.lambda > 0 && std::isfinite(config.lambda), "lambda must be positive");
   requireConfig(config.h0 > 0 && std::isfinite(config.h0), "h0 must be positive");
   requireConfig(config.sweeps >= 1, "sweeps must be at least 1");
-  requireConfig(config.noise.k >= 0 && config.noise.quantization_m >= 0 &&
-                    config.noise.k + config.noise.quantization_m > 0,
-                "noise k and quantization_m must be non-negative, not both zero");
+  requireConfig(config.sensor.noise_k >= 0 && config.sensor.quantization_m >= 0,
+                "sensor noise_k and quantization_m must be non-negative");
   const int rows = image.rows(), cols = image.cols();
-  EdgeMask edges(rows, cols);
+  Raster<std::uint8_t> edges(rows, cols);
   if (rows == 0 || cols == 0) return edges;
   const long pixels = long(rows) * cols;
 
@@ -248,10 +245,10 @@ EdgeMask detectRangeEdges(const RangeImage& image, const GncConfig& config) {
       }
   });
 
-  // The membrane's data and links. σ_u = σ(ρ)/ρ² = σ_q·u² + k is the noise of u, so the data
-  // term is weighted by 1/σ_u² and a link's k is 2/(σ_u,i + σ_u,j).
+  // The membrane's data and links. σ_u (NoiseU) is the noise of u, so the data term is weighted
+  // by 1/σ_u² and a link's k is 2/(σ_u,i + σ_u,j).
   Membrane m(rows, cols);
-  const NoiseU noise{float(config.noise.quantization_m / std::sqrt(12.0)), float(config.noise.k)};
+  const NoiseU noise(config.sensor);
   for (int k = 0; k < Membrane::kArrays; ++k)
     m.storeRow(Membrane::Array(k), -1, nullptr), m.storeRow(Membrane::Array(k), rows, nullptr);
   forRows(rows, pixels, [&](int r0, int r1) {
@@ -292,10 +289,10 @@ EdgeMask detectRangeEdges(const RangeImage& image, const GncConfig& config) {
   return edges;
 }
 
-long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise) {
-  if (!(ambiguity_m > 0 && std::isfinite(ambiguity_m)))
-    throw std::invalid_argument("unwrapRanges: ambiguity_m must be positive");
-  const double a = ambiguity_m;
+long unwrapRanges(RangeImage& image, const SensorModel& sensor) {
+  if (!(sensor.ambiguity_m > 0 && std::isfinite(sensor.ambiguity_m)))
+    throw std::invalid_argument("unwrapRanges: the sensor's ambiguity_m must be positive");
+  const double a = sensor.ambiguity_m;
   const int rows = image.rows(), cols = image.cols();
   // u = 1/ρ of the decided pixels (NaN: not decided). On a plane 1/ρ is linear in the beam
   // direction, so a linear prediction from two neighbours is nearly exact at any incidence.
@@ -307,7 +304,7 @@ long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise
   };
   // The continuity tolerance on u around a prediction u_pred: kUnwrapSigmas·√6·σ_u.
   auto tolerance = [&](double u_pred) {
-    return kUnwrapSigmas * std::sqrt(6.0) * noise.sigma(1.0 / u_pred) * u_pred * u_pred;
+    return kUnwrapSigmas * std::sqrt(6.0) * (std::max(sensor.quantization_m, 1e-3) / std::sqrt(12.0) + sensor.noise_k * (1.0 / u_pred) * (1.0 / u_pred)) * u_pred * u_pred  /* LEGACY */;
   };
 
   // The seed, taken as unfolded: in the lowest row that has one, the longest run of at least three

@@ -5,23 +5,14 @@
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "perception/raster.hpp"
 #include "perception/range_image.hpp"
+#include "perception/sensor_model.hpp"
 
 namespace ambler::perception {
 
-// 1 where a pixel touches a depth discontinuity (both pixels either side of it), else 0.
-using EdgeMask = Eigen::Matrix<std::uint8_t, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
-// The range noise both functions assume (paper §3.3 and the ERIM's 8-bit counts).
-struct RangeNoise {
-  double k = 3e-4;                 // σ_ρ = k·ρ², ρ in metres
-  double quantization_m = 0.0762;  // one count; its error is uniform, σ = q/√12
-  // σ(ρ) = q/√12 + k·ρ²: bounds the root-sum-square of the two, and is within √2 of it.
-  double sigma(double rho) const;
-};
-
 struct GncConfig {
-  RangeNoise noise;
+  SensorModel sensor;  // its σ_ρ (SensorModel::rangeSigma) sets the membrane's noise
   // The weak membrane runs on inverse range u = 1/ρ, in units of its noise σ_u = σ(ρ)/ρ², with
   // each link's local trend removed: E = Σ (f − u)²/σ_u² + Σ g(k·(f_j − f_i − s_ij)), k = 1/σ_u,
   // g the truncated quadratic λ²t² capped at α = λh0²/2 (Blake & Zisserman's notation).
@@ -30,10 +21,11 @@ struct GncConfig {
   int sweeps = 3;       // red-black SOR sweeps at each step of the p-sequence 1, 1/2, … 1/(2λ)
 };
 
-// The edges of `image` (NaN or non-positive pixels carry no data: their links neither smooth nor
-// break, so a valid pixel next to an invalid one is not an edge by itself). Throws
+// The edges of `image`: 1 where a pixel touches a depth discontinuity (both pixels either side of
+// it), else 0. NaN or non-positive pixels carry no data: their links neither smooth nor break, so
+// a valid pixel next to an invalid one is not an edge by itself. Throws
 // std::invalid_argument for a config out of range.
-EdgeMask detectRangeEdges(const RangeImage& image, const GncConfig& config = {});
+Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& config = {});
 
 // Unwraps ranges folded by the ambiguity interval A, in place. The seed is the longest continuous
 // stretch of the lowest row that has one (at least three pixels, each continuous with the linear
@@ -43,7 +35,8 @@ EdgeMask detectRangeEdges(const RangeImage& image, const GncConfig& config = {})
 // decided pixels beside it in its row; failing that, across a depth discontinuity, the one multiple
 // that changes the predicted range by at most a factor 1.5. A pixel no neighbour decides becomes
 // NaN, never a wrapped range. Returns the number of pixels that received a non-zero multiple of A.
-// Throws std::invalid_argument if ambiguity_m is not positive.
-long unwrapRanges(RangeImage& image, double ambiguity_m, const RangeNoise& noise = {});
+// The interval and the noise come from `sensor`. Throws std::invalid_argument if
+// sensor.ambiguity_m is not positive.
+long unwrapRanges(RangeImage& image, const SensorModel& sensor);
 
 }  // namespace ambler::perception

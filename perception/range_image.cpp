@@ -8,7 +8,7 @@ namespace ambler::perception {
 
 RangeImage RangeImage::blank(int rows, int cols, double fov_v, double fov_h) {
   RangeImage image;
-  image.range = RangeMatrix::Constant(rows, cols, std::numeric_limits<float>::quiet_NaN());
+  image.range = Raster<float>::Constant(rows, cols, std::numeric_limits<float>::quiet_NaN());
   image.phi.resize(rows);
   image.theta.resize(cols);
   for (int r = 0; r < rows; ++r) image.phi[r] = rowAngle(r, rows, fov_v);

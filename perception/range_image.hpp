@@ -5,12 +5,12 @@
 #include <cmath>
 #include <vector>
 
+#include "perception/raster.hpp"
+
 namespace ambler::perception {
 
-using RangeMatrix = Eigen::Matrix<float, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
 struct RangeImage {
-  RangeMatrix range;                 // rows × cols, metres; NaN = no return
+  Raster<float> range;                 // rows × cols, metres; NaN = no return
   std::vector<double> phi;           // per row, radians; row 0 is the top (largest φ)
   std::vector<double> theta;         // per column, radians; column 0 is the leftmost
   Eigen::Isometry3d T_WS = Eigen::Isometry3d::Identity();  // sensor → world

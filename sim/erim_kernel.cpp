@@ -78,14 +78,14 @@ void measureScalar(const MeasureTile& t, const double* rho, float* out) {
   std::uint64_t key[16];
   for (int i = 0; i < 16; ++i) {
     key[i] = noiseKey(t.stream, t.pixel0 + std::uint64_t(i / 4) * t.cols + i % 4);
-    const std::uint64_t bits = terrains::mix64(key[i]);
+    const std::uint64_t bits = base::mix64(key[i]);
     const std::uint64_t layer = bits & 127;
-    const double u = terrains::signedUnit52(bits);
+    const double u = base::signedUnit52(bits);
     slow[i] = t.noise && !(std::abs(u) < t.zig->ratio[layer]);
     normal[i] = t.noise ? u * t.zig->x[layer] : 0.0;
   }
   for (int i = 0; i < 16; ++i)  // the ziggurat's rare edges and tail
-    if (slow[i]) normal[i] = terrains::normalFromKey(key[i]);
+    if (slow[i]) normal[i] = base::normalFromKey(key[i]);
   for (int i = 0; i < 16; ++i) out[i] = rho[i] == rho[i] ? float((*t.measure)(rho[i], normal[i])) : kNaN;
 }
 
@@ -220,7 +220,7 @@ void measureTile(Isa isa, const MeasureTile& t, const double* rho, unsigned lane
 
 void finishSlowDraws(const MeasureTile& t, SlowDraws& slow, float* range) {
   for (int j = 0; j < slow.count; ++j) {
-    const double normal = terrains::normalFromKey(noiseKey(t.stream, slow.pixel[j]));
+    const double normal = base::normalFromKey(noiseKey(t.stream, slow.pixel[j]));
     range[slow.pixel[j]] = float((*t.measure)(slow.rho[j], normal));
   }
   slow.count = 0;

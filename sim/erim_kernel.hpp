@@ -6,7 +6,8 @@
 // -ffp-contract=off). Lane i of a tile is pixel (r0 + i / 4, c0 + i % 4).
 #include <cstdint>
 
-#include "terrains/random.hpp"
+#include "base/random.hpp"
+#include "perception/sensor_model.hpp"
 
 namespace ambler::sim::kernel {
 
@@ -38,12 +39,12 @@ void centreHits(Isa isa, const float* t, const unsigned* geom, double max_range,
 // Straight-line: every branch a select, with uniform conditions on the config.
 struct Measurement {
   double k, ambiguity, inv_ambiguity, q, inv_q;
-  Measurement(double noise_k, double ambiguity_m, double quantization_m)
-      : k(noise_k),
-        ambiguity(ambiguity_m),
-        inv_ambiguity(ambiguity_m > 0 ? 1.0 / ambiguity_m : 0.0),
-        q(quantization_m),
-        inv_q(quantization_m > 0 ? 1.0 / quantization_m : 0.0) {}
+  explicit Measurement(const perception::SensorModel& s)
+      : k(s.noise_k),
+        ambiguity(s.ambiguity_m),
+        inv_ambiguity(s.ambiguity_m > 0 ? 1.0 / s.ambiguity_m : 0.0),
+        q(s.quantization_m),
+        inv_q(s.quantization_m > 0 ? 1.0 / s.quantization_m : 0.0) {}
 
   // Round to nearest (ties to even) for 0 <= x < 2^51 with two additions: no libm call and no
   // integer conversion on the critical path. (IEEE semantics: never -ffast-math, which could
@@ -56,7 +57,7 @@ struct Measurement {
   // The reported range for true range rho and standard normal draw `normal`: noise, wrap,
   // quantisation. With ambiguity or q zero the reciprocals are zero and those steps leave m alone.
   double operator()(double rho, double normal) const {
-    double m = rho + k * rho * rho * normal;
+    double m = rho + k * rho * rho * normal;  // σ = SensorModel::noiseSigma(ρ), inlined
     m = m > 0.0 ? m : 0.0;
     double n = roundNearest(m * inv_ambiguity);
     n = n * ambiguity > m ? n - 1.0 : n;  // floor(m / ambiguity)
@@ -73,7 +74,7 @@ struct Measurement {
 // Noise and measurement of one tile.
 struct MeasureTile {
   const Measurement* measure;
-  const terrains::ZigguratTables* zig;
+  const base::ZigguratTables* zig;
   std::uint64_t stream;  // the scan's noise stream: mix64(seed)
   bool noise;            // noise_k > 0
   std::uint64_t pixel0;  // the index r0·cols + c0 of lane 0; lane i is pixel0 + (i/4)·cols + i%4

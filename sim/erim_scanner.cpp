@@ -15,7 +15,7 @@
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_kernel.hpp"
 #include "sim/ray_scene.hpp"
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 
 namespace ambler::sim {
 
@@ -42,10 +42,6 @@ Footprint footprint() {
   return f;
 }
 
-void requireConfig(bool ok, const std::string& what) {
-  if (!ok) throw std::invalid_argument("ErimConfig: " + what);
-}
-
 // Precomputed sin/cos of the scan angles of one footprint sample.
 struct AngleTable {
   std::vector<double> sin_phi, cos_phi, sin_theta, cos_theta;
@@ -66,20 +62,13 @@ AngleTable angleTable(const perception::RangeImage& img, double dphi, double dth
 
 }  // namespace
 
-double measureRange(double rho, double normal, const ErimConfig& cfg) {
-  return kernel::Measurement(cfg.noise_k, cfg.ambiguity_m, cfg.quantization_m)(rho, normal);
+double measureRange(double rho, double normal, const perception::SensorModel& sensor) {
+  return kernel::Measurement(sensor)(rho, normal);
 }
 
-ErimScanner::ErimScanner(const RayScene& scene, ErimConfig config)
-    : scene_(scene), config_(config) {
-  requireConfig(config.rows >= 1 && config.cols >= 1, "rows and cols must be positive");
-  requireConfig(config.fov_v_rad > 0 && config.fov_v_rad < std::numbers::pi, "fov_v out of (0, pi)");
-  requireConfig(config.fov_h_rad > 0 && config.fov_h_rad < std::numbers::pi, "fov_h out of (0, pi)");
-  requireConfig(config.noise_k >= 0 && config.quantization_m >= 0 && config.ambiguity_m >= 0,
-                "noise_k, quantization_m and ambiguity_m must be non-negative");
-  requireConfig(config.max_range_m > 0, "max_range_m must be positive");
-  requireConfig(config.beam_divergence_rad >= 0, "beam_divergence_rad must be non-negative");
-  requireConfig(config.dropout >= 0 && config.dropout < 1, "dropout must be in [0, 1)");
+ErimScanner::ErimScanner(const RayScene& scene, perception::SensorModel sensor)
+    : scene_(scene), sensor_(sensor) {
+  perception::validate(sensor_);
 }
 
 Eigen::Vector3d pixelDirection(const perception::RangeImage& image, int r, int c) {
@@ -94,10 +83,6 @@ std::optional<Eigen::Vector3d> Scan::trueHit(int r, int c) const {
   return image.T_WS.translation() + double(t) * pixelDirection(image, r, c);
 }
 
-double ErimScanner::beamDivergence() const {
-  if (config_.beam_divergence_rad > 0) return config_.beam_divergence_rad;
-  return std::max(config_.fov_v_rad / config_.rows, config_.fov_h_rad / config_.cols);
-}
 
 Scan ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed) const {
   Scan out;
@@ -170,7 +155,7 @@ struct ScanJob {
     if (dropout > 0)
       for (int i = 0; i < 16; ++i) {
         const std::uint64_t key = kernel::noiseKey(m.stream, m.pixel0 + std::uint64_t(i / 4) * cols + i % 4);
-        if (terrains::toUnit(terrains::mix64(~key)) < dropout) rho[i] = kNaN;
+        if (base::toUnit(base::mix64(~key)) < dropout) rho[i] = kNaN;
       }
     unsigned lanes = 0;
     for (int i = 0; i < 16; ++i) lanes |= unsigned(t.valid[i] & 1) << i;
@@ -195,28 +180,28 @@ struct ScanJob {
 }  // namespace
 
 void ErimScanner::scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& out) const {
-  const int rows = config_.rows, cols = config_.cols;
+  const int rows = sensor_.rows, cols = sensor_.cols;
   // Every pixel of every output is written below, so reused buffers need no clearing.
   if (out.image.rows() != rows || out.image.cols() != cols) {
-    out.image = perception::RangeImage::blank(rows, cols, config_.fov_v_rad, config_.fov_h_rad);
+    out.image = perception::RangeImage::blank(rows, cols, sensor_.fov_v_rad, sensor_.fov_h_rad);
     out.true_range.resize(rows, cols);
     out.geom.resize(rows, cols);
   } else {
-    for (int r = 0; r < rows; ++r) out.image.phi[r] = perception::rowAngle(r, rows, config_.fov_v_rad);
-    for (int c = 0; c < cols; ++c) out.image.theta[c] = perception::colAngle(c, cols, config_.fov_h_rad);
+    for (int r = 0; r < rows; ++r) out.image.phi[r] = perception::rowAngle(r, rows, sensor_.fov_v_rad);
+    for (int c = 0; c < cols; ++c) out.image.theta[c] = perception::colAngle(c, cols, sensor_.fov_h_rad);
   }
   out.image.T_WS = T_WS;
 
   const Footprint fp = footprint();
-  const int samples = config_.mixed_pixels ? kFootprintSamples : 1;
-  const double radius = 0.5 * beamDivergence();
+  const int samples = sensor_.mixed_pixels ? kFootprintSamples : 1;
+  const double radius = 0.5 * sensor_.beamDivergence();
   std::vector<AngleTable> tables;
   for (int k = 0; k < samples; ++k)
     tables.push_back(angleTable(out.image, radius * fp.dv[k], radius * fp.du[k]));
-  const kernel::Measurement measure(config_.noise_k, config_.ambiguity_m, config_.quantization_m);
+  const kernel::Measurement measure(sensor_);
   ScanJob job{scene_, kernel::activeIsa(), rows, cols, samples, {}, {}, T_WS.translation(), fp,
-              config_.max_range_m, config_.dropout,
-              {&measure, &terrains::zigguratTables(), terrains::mix64(seed), config_.noise_k > 0, 0, std::uint64_t(cols)},
+              sensor_.max_range_m, sensor_.dropout,
+              {&measure, &base::zigguratTables(), base::mix64(seed), sensor_.noise_k > 0, 0, std::uint64_t(cols)},
               out};
   for (int k = 0; k < samples; ++k)
     job.angles[k] = {tables[k].sin_phi.data(), tables[k].cos_phi.data(), tables[k].sin_theta.data(),

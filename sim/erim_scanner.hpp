@@ -6,25 +6,14 @@
 #include <cstdint>
 #include <optional>
 
+#include "perception/raster.hpp"
 #include "perception/range_image.hpp"
+#include "perception/sensor_model.hpp"
 
 namespace ambler::sim {
 
 class RayScene;
 
-struct ErimConfig {
-  int rows = 64;
-  int cols = 256;
-  double fov_v_rad = 30.0 * 3.14159265358979323846 / 180.0;
-  double fov_h_rad = 80.0 * 3.14159265358979323846 / 180.0;
-  double noise_k = 0.0003;          // σ_ρ = noise_k·ρ²; 0 = off
-  double quantization_m = 0.0762;   // one count; 0 = off
-  double ambiguity_m = 19.5;        // ranges wrap modulo this; 0 = off
-  bool mixed_pixels = true;         // sample the beam footprint with sub-rays
-  double max_range_m = 40.0;        // no return beyond
-  double beam_divergence_rad = 0.0; // footprint's full angle; 0 = the larger pixel spacing
-  double dropout = 0.0;             // probability that a pixel returns nothing
-};
 
 // Sub-rays of the beam footprint: the 7-point cubature of a uniform disk (the centre with
 // weight 1/4, six points at √(2/3) of the radius with weight 1/8 each).
@@ -32,7 +21,7 @@ inline constexpr int kFootprintSamples = 7;
 
 struct Scan {
   perception::RangeImage image;   // what the sensor reports
-  perception::RangeMatrix true_range;  // the central ray's true range; NaN if it hit nothing
+  perception::Raster<float> true_range;  // the central ray's true range; NaN if it hit nothing
   Eigen::Matrix<int, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> geom;  // -1: no hit
 
   // The true hit of pixel (r, c)'s central ray in the world frame (nullopt if it hit nothing):
@@ -43,8 +32,8 @@ struct Scan {
 
 class ErimScanner {
  public:
-  // Throws std::invalid_argument for a config out of range.
-  ErimScanner(const RayScene& scene, ErimConfig config);
+  // Throws std::invalid_argument for a sensor model out of range (perception::validate).
+  ErimScanner(const RayScene& scene, perception::SensorModel sensor);
 
   // One range image from sensor pose T_WS. All random draws derive from `seed` and the pixel
   // index, so the result does not depend on the thread schedule. Parallel over all cores.
@@ -52,13 +41,11 @@ class ErimScanner {
   // The same into `out`, reusing its memory when its size matches (for sweeps and benchmarks).
   void scan(const Eigen::Isometry3d& T_WS, std::uint64_t seed, Scan& out) const;
 
-  const ErimConfig& config() const { return config_; }
-  // The footprint's full angle actually used (resolves the 0 default).
-  double beamDivergence() const;
+  const perception::SensorModel& sensor() const { return sensor_; }
 
  private:
   const RayScene& scene_;
-  ErimConfig config_;
+  perception::SensorModel sensor_;
 };
 
 // The direction, in the world, of pixel (r, c)'s central ray: exactly what the scanner casts.
@@ -66,6 +53,6 @@ Eigen::Vector3d pixelDirection(const perception::RangeImage& image, int r, int c
 
 // The measurement model applied to one true range (no geometry): noise, wrap, quantisation.
 // `normal` is a standard normal draw. Returns the reported range (never negative).
-double measureRange(double rho, double normal, const ErimConfig& config);
+double measureRange(double rho, double normal, const perception::SensorModel& sensor);
 
 }  // namespace ambler::sim

@@ -9,6 +9,7 @@
 #include <immintrin.h>
 #pragma GCC diagnostic pop
 #include <mujoco/mujoco.h>
+#include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 
 #include <cstddef>
@@ -430,6 +431,44 @@ void RayScene::intersectMany(const std::vector<Eigen::Vector3d>& origins,
 
 Eigen::AlignedBox3d RayScene::bounds() const { return impl_->bounds; }
 
-RTCSceneTy* RayScene::embreeScene() const { return impl_->scene; }
+void RayScene::referenceCast(const perception::RangeImage& img, const Eigen::Isometry3d& T,
+                             std::vector<float>& t_out) const {
+  RTCScene scene = impl_->scene;
+  const int rows = img.rows(), cols = img.cols();
+  std::vector<double> sp(rows), cp(rows), st(cols), ct(cols);
+  for (int r = 0; r < rows; ++r) sp[r] = std::sin(img.phi[r]), cp[r] = std::cos(img.phi[r]);
+  for (int c = 0; c < cols; ++c) st[c] = std::sin(img.theta[c]), ct[c] = std::cos(img.theta[c]);
+  const Eigen::Matrix3d R = T.linear();
+  const Eigen::Vector3d o = T.translation();
+  t_out.resize(std::size_t(rows) * cols);
+  tbb::parallel_for(tbb::blocked_range2d<int>(0, (rows + 3) / 4, 0, (cols + 3) / 4), [&](const auto& range) {
+    RTCRayHit16 rh;
+    alignas(64) int valid[16];
+    RTCIntersectContext ctx;
+    rtcInitIntersectContext(&ctx);
+    ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    for (int tr = range.rows().begin(); tr != range.rows().end(); ++tr)
+      for (int tc = range.cols().begin(); tc != range.cols().end(); ++tc) {
+        for (int i = 0; i < 16; ++i) {
+          const int r = std::min(tr * 4 + i / 4, rows - 1), c = std::min(tc * 4 + i % 4, cols - 1);
+          valid[i] = (tr * 4 + i / 4 < rows && tc * 4 + i % 4 < cols) ? -1 : 0;
+          const Eigen::Vector3d d = R * Eigen::Vector3d(st[c], cp[r] * ct[c], sp[r] * ct[c]);
+          rh.ray.org_x[i] = float(o.x()), rh.ray.org_y[i] = float(o.y()), rh.ray.org_z[i] = float(o.z());
+          rh.ray.dir_x[i] = float(d.x()), rh.ray.dir_y[i] = float(d.y()), rh.ray.dir_z[i] = float(d.z());
+          rh.ray.tnear[i] = 0.0f;
+          rh.ray.tfar[i] = std::numeric_limits<float>::infinity();
+          rh.ray.mask[i] = 0xFFFFFFFFu;
+          rh.ray.time[i] = 0.0f;
+          rh.ray.flags[i] = 0;
+          rh.hit.geomID[i] = RTC_INVALID_GEOMETRY_ID;
+          rh.hit.instID[0][i] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect16(valid, scene, &ctx, &rh);
+        for (int i = 0; i < 16; ++i)
+          if (valid[i]) t_out[std::size_t(tr * 4 + i / 4) * cols + tc * 4 + i % 4] = rh.ray.tfar[i];
+      }
+  });
+}
+
 
 }  // namespace ambler::sim

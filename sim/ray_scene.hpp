@@ -9,7 +9,8 @@
 #include <optional>
 #include <vector>
 
-struct RTCSceneTy;
+#include "perception/range_image.hpp"
+
 
 namespace ambler::sim {
 
@@ -75,8 +76,10 @@ class RayScene {
   // Axis-aligned bounds of everything in the scene (world frame).
   Eigen::AlignedBox3d bounds() const;
 
-  // The committed Embree scene, for benchmarks that cast bare Embree packets against it.
-  RTCSceneTy* embreeScene() const;
+  // The benchmark's reference: every pixel ray of `image` from pose T (the image's own pose is not
+  // used), cast in 4×4 tiles of bare Embree packets as the emulator casts them, over all cores;
+  // only the float hit distance is kept (+inf: miss), row-major in t. No refinement, no noise.
+  void referenceCast(const perception::RangeImage& image, const Eigen::Isometry3d& T, std::vector<float>& t) const;
 
  private:
   struct Impl;

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "sim/atomic_file.hpp"
+#include "base/atomic_file.hpp"
 
 namespace ambler::sim {
 
@@ -171,11 +171,11 @@ std::filesystem::path writeWorld(const terrains::Terrain& terrain, const std::fi
   std::memcpy(bin.data(), dims, 8);
   bin.append(reinterpret_cast<const char*>(data.normalised.data()),
              data.normalised.size() * sizeof(float));
-  writeFileAtomic(dir / "terrain.bin", bin);
+  base::writeFileAtomic(dir / "terrain.bin", bin);
   for (std::size_t i = 0; i < terrain.rocks.size(); ++i)
-    writeFileAtomic(dir / (rockName(i) + ".stl"), stlBytes(terrain.rocks[i]));
+    base::writeFileAtomic(dir / (rockName(i) + ".stl"), stlBytes(terrain.rocks[i]));
   const auto xml = dir / "world.xml";
-  writeFileAtomic(xml, worldXml(terrain, name));
+  base::writeFileAtomic(xml, worldXml(terrain, name));
   return xml;
 }
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 
 namespace ambler::terrains {
 
@@ -44,7 +44,7 @@ double craterProfile(double r, double diameter_m) {
 std::vector<Crater> sampleCraters(const CraterSpec& spec, const Heightfield& grid,
                                   std::uint64_t key) {
   checkCraterSpec(spec);
-  Rng rng(key);
+  base::Rng rng(key);
   std::vector<Crater> craters(spec.count);
   for (auto& c : craters) {
     c.diameter_m = craterDiameterQuantile(spec, rng.uniform());

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 
 namespace ambler::terrains {
 namespace {
@@ -23,7 +23,7 @@ struct Mode {
 // a bin from the bin's share of the spectrum (density ∝ P(k)·k ∝ k^−(1+2H)) and giving the mode
 // the bin's whole variance makes the expected structure function exactly that of the continuous
 // band-limited spectrum, not a staircase of it.
-std::vector<Mode> drawModes(const FractalBand& band, double hurst, Rng& rng) {
+std::vector<Mode> drawModes(const FractalBand& band, double hurst, base::Rng& rng) {
   const double octaves = std::log2(band.k_max / band.k_min);
   const int bins = std::max(1, int(std::ceil(kFractalModesPerOctave * octaves)));
   const double ratio = std::pow(band.k_max / band.k_min, 1.0 / bins);
@@ -60,7 +60,7 @@ void addFractal(Heightfield& ground, double relief_m, double hurst, std::uint64_
     throw std::invalid_argument("fractal: relief_m must be finite and >= 0");
   if (relief_m == 0.0) return;
 
-  Rng rng(key);
+  base::Rng rng(key);
   const std::vector<Mode> modes = drawModes(fractalBand(ground), hurst, rng);
   const int rows = ground.rows(), cols = ground.cols();
 

@@ -74,7 +74,7 @@ double rockNumberDensity(const RockSpec& spec) {
   return diameterTable(spec).cumulative.back();
 }
 
-std::vector<double> sampleRockDiameters(const RockSpec& spec, double area_m2, Rng& rng) {
+std::vector<double> sampleRockDiameters(const RockSpec& spec, double area_m2, base::Rng& rng) {
   checkRockSpec(spec);
   const DiameterTable table = diameterTable(spec);
   const double total = table.cumulative.back();
@@ -92,7 +92,7 @@ std::vector<double> sampleRockDiameters(const RockSpec& spec, double area_m2, Rn
   return diameters;
 }
 
-Rock makeRockShape(double diameter_m, Rng& rng) {
+Rock makeRockShape(double diameter_m, base::Rng& rng) {
   const int points = 30 + int(rng.below(31));
   const double a = 0.5 * diameter_m, b = a * rng.uniform(0.6, 1.0);
   const double c = diameter_m * rng.uniform(0.25, 0.5);
@@ -122,7 +122,7 @@ Rock makeRockShape(double diameter_m, Rng& rng) {
 std::vector<Rock> makeRocks(const RockSpec& spec, const Heightfield& ground, std::uint64_t key) {
   checkRockSpec(spec);
   const double width = ground.xMax() - ground.xMin(), depth = ground.yMax() - ground.yMin();
-  Rng sizes(streamKey(key, 0)), places(streamKey(key, 1));
+  base::Rng sizes(base::streamKey(key, 0)), places(base::streamKey(key, 1));
   const std::vector<double> diameters = sampleRockDiameters(spec, width * depth, sizes);
 
   // Each rock's shape comes from its own stream, so it does not depend on how many tries
@@ -130,7 +130,7 @@ std::vector<Rock> makeRocks(const RockSpec& spec, const Heightfield& ground, std
   std::vector<Rock> rocks;
   std::vector<double> radius, burial;
   for (std::size_t i = 0; i < diameters.size(); ++i) {
-    Rng shape(streamKey(key, 2, i));
+    base::Rng shape(base::streamKey(key, 2, i));
     rocks.push_back(makeRockShape(diameters[i], shape));
     radius.push_back(boundingRadius(rocks.back()));
     burial.push_back(shape.uniform(0.0, kMaxBurial));

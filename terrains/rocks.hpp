@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "terrains/heightfield.hpp"
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 #include "terrains/terrain.hpp"
 
 namespace ambler::terrains {
@@ -25,12 +25,12 @@ double rockNumberDensity(const RockSpec& spec);
 
 // N = round(area·rockNumberDensity) diameters by stratified inverse-CDF sampling
 // (D_i = G⁻¹((i + u_i)/N)), largest first. Throws std::invalid_argument past 2e6 rocks.
-std::vector<double> sampleRockDiameters(const RockSpec& spec, double area_m2, Rng& rng);
+std::vector<double> sampleRockDiameters(const RockSpec& spec, double area_m2, base::Rng& rng);
 
 // An irregular convex rock of plan-view diameter D, centred at the origin: the hull of 30–60
 // jittered points on an ellipsoid (horizontal semi-axes a ≥ b ≥ 0.6a, height semi-axis c in
 // [0.25, 0.5]·D), turned by a random yaw, then scaled in x and y to a footprint of πD²/4.
-Rock makeRockShape(double diameter_m, Rng& rng);
+Rock makeRockShape(double diameter_m, base::Rng& rng);
 
 // Rocks for the whole ground, largest first, each at a uniform random position with its
 // footprint inside the grid and its bounding circle clear of earlier rocks, its centre sunk below

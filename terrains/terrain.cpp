@@ -9,7 +9,7 @@
 
 #include "terrains/craters.hpp"
 #include "terrains/fractal.hpp"
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 #include "terrains/rocks.hpp"
 
 namespace ambler::terrains {
@@ -108,15 +108,15 @@ Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed) {
   const TerrainKind kind = spec.kind;
   addTilt(ground, spec.slope_deg);
   if (kind == TerrainKind::Fractal || kind == TerrainKind::Mars)
-    addFractal(ground, spec.relief_m, spec.hurst, streamKey(seed, kFractalStream));
+    addFractal(ground, spec.relief_m, spec.hurst, base::streamKey(seed, kFractalStream));
   if (spec.sinusoid || kind == TerrainKind::Sinusoid)
     addSinusoid(ground, spec.sinusoid.value_or(SinusoidSpec{}));
   if (spec.steps.empty() && kind == TerrainKind::Steps) addStep(ground, StepSpec{});
   for (const auto& step : spec.steps) addStep(ground, step);
   if (const auto craters = cratersOf(spec))
-    addCraters(ground, sampleCraters(*craters, ground, streamKey(seed, kCraterStream)));
+    addCraters(ground, sampleCraters(*craters, ground, base::streamKey(seed, kCraterStream)));
   if (const auto rocks = rocksOf(spec))
-    terrain.rocks = makeRocks(*rocks, ground, streamKey(seed, kRockStream));
+    terrain.rocks = makeRocks(*rocks, ground, base::streamKey(seed, kRockStream));
   return terrain;
 }
 

@@ -18,6 +18,16 @@
 namespace ambler::eval {
 namespace {
 
+// Ground truth as the runner has it (sim::GroundTruth::elevation): a map on `grid`, Known with
+// σ_z = 0 where z is finite.
+perception::ElevationMap truthMap(const perception::MapGrid& grid, const perception::Raster<float>& z) {
+  perception::ElevationMap m(grid);
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c)
+      if (std::isfinite(z(r, c))) m.setKnown(r, c, z(r, c), 0.0f);
+  return m;
+}
+
 namespace fs = std::filesystem;
 using perception::CellState;
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -34,8 +44,8 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 // (boundary) and (1,1) — 5/7. (0,4) is hidden, known and 1 m > 3σ off.
 struct Case {
   perception::ElevationMap map;
-  sim::ElevationRaster truth;
-  sim::VisibilityRaster vis;
+  perception::Raster<float> truth;
+  perception::Raster<std::uint8_t> vis;
   Case() : map(perception::MapGrid{-1.0, 2.0, 0.5, 4, 5}), truth(4, 5), vis(4, 5) {
     truth.setConstant(1.0f);
     truth(1, 2) = kNaN;
@@ -58,7 +68,7 @@ struct Case {
 
 TEST(MapMetrics, HandMadeCase) {
   const Case k;
-  const MapMetrics m = mapMetrics(k.map, k.truth, k.vis);
+  const MapMetrics m = mapMetrics(k.map, truthMap(k.map.grid(), k.truth), k.vis);
   EXPECT_EQ(m.cells, 20);
   EXPECT_EQ(m.known, 8);
   EXPECT_EQ(m.shadow, 3);
@@ -80,16 +90,16 @@ TEST(MapMetrics, HandMadeCase) {
 TEST(MapMetrics, EvenCountMedianAveragesTheMiddlePair) {
   Case k;
   k.map.setUnknown(1, 1, CellState::Unseen);  // drops |e| 0.25: 0, 0.125, [0.25, 0.5], 0.75, 1
-  const MapMetrics m = mapMetrics(k.map, k.truth, k.vis);
+  const MapMetrics m = mapMetrics(k.map, truthMap(k.map.grid(), k.truth), k.vis);
   EXPECT_EQ(m.compared, 6);
   EXPECT_DOUBLE_EQ(m.median_abs_error_m, 0.375);
 }
 
 TEST(MapMetrics, EmptyPopulationsAreNaNAndJsonNull) {
   perception::ElevationMap map(perception::MapGrid{0.0, 1.0, 0.5, 2, 2});  // all unseen
-  const sim::ElevationRaster truth = sim::ElevationRaster::Constant(2, 2, 0.0f);
-  const sim::VisibilityRaster vis = sim::VisibilityRaster::Constant(2, 2, std::uint8_t(sim::Visibility::Visible));
-  const MapMetrics m = mapMetrics(map, truth, vis);
+  const perception::Raster<float> truth = perception::Raster<float>::Constant(2, 2, 0.0f);
+  const perception::Raster<std::uint8_t> vis = perception::Raster<std::uint8_t>::Constant(2, 2, std::uint8_t(sim::Visibility::Visible));
+  const MapMetrics m = mapMetrics(map, truthMap(map.grid(), truth), vis);
   EXPECT_EQ(m.known, 0);
   EXPECT_DOUBLE_EQ(m.coverage, 0.0);
   EXPECT_TRUE(std::isnan(m.rms_error_m));
@@ -107,7 +117,7 @@ TEST(MapMetrics, EmptyPopulationsAreNaNAndJsonNull) {
 
 TEST(MapMetrics, JsonKeysInContractOrder) {
   const Case k;
-  const MapMetrics m = mapMetrics(k.map, k.truth, k.vis);
+  const MapMetrics m = mapMetrics(k.map, truthMap(k.map.grid(), k.truth), k.vis);
   const auto keys = [](const nlohmann::ordered_json& j) {
     std::vector<std::string> out;
     for (const auto& item : j.items()) out.push_back(item.key());
@@ -127,8 +137,8 @@ TEST(MapMetrics, JsonKeysInContractOrder) {
 
 TEST(MapMetrics, RejectsRastersOffTheMapGrid) {
   const Case k;
-  EXPECT_THROW(mapMetrics(k.map, sim::ElevationRaster(5, 4), k.vis), std::invalid_argument);
-  EXPECT_THROW(mapMetrics(k.map, k.truth, sim::VisibilityRaster(4, 4)), std::invalid_argument);
+  EXPECT_THROW(mapMetrics(k.map, truthMap(perception::MapGrid{-1.0, 2.0, 0.5, 5, 4}, perception::Raster<float>::Zero(5, 4)), k.vis), std::invalid_argument);
+  EXPECT_THROW(mapMetrics(k.map, truthMap(k.map.grid(), k.truth), perception::Raster<std::uint8_t>(4, 4)), std::invalid_argument);
 }
 
 // Range bands on a 1 × 8 row of 1 m cells, the sensor at (0.5, 0.5, 0) above the centre of cell 0,
@@ -145,8 +155,8 @@ TEST(MapMetrics, RejectsRastersOffTheMapGrid) {
 // Cell 0 sits exactly on the 6 m edge: bands are [lo, hi).
 TEST(MapMetrics, RangeBandsByDistanceToTheTrueSurface) {
   perception::ElevationMap map(perception::MapGrid{0.0, 1.0, 1.0, 1, 8});
-  sim::ElevationRaster truth(1, 8);
-  sim::VisibilityRaster vis(1, 8);
+  perception::Raster<float> truth(1, 8);
+  perception::Raster<std::uint8_t> vis(1, 8);
   const float z[8] = {6, 0, 10, 4, kNaN, 12, 8, 0};
   const char* v = "vvvvvhvo";
   for (int c = 0; c < 8; ++c) {
@@ -163,7 +173,7 @@ TEST(MapMetrics, RangeBandsByDistanceToTheTrueSurface) {
   map.setKnown(0, 6, 7.5f, 0.5f);
   map.setKnown(0, 7, 0.25f, 0.25f);
   const Eigen::Vector3d sensor(0.5, 0.5, 0.0);
-  const MapMetrics m = mapMetrics(map, truth, vis, &sensor);
+  const MapMetrics m = mapMetrics(map, truthMap(map.grid(), truth), vis, &sensor);
   ASSERT_EQ(m.bands.size(), 5u);
   const double inf = std::numeric_limits<double>::infinity();
   const double lo[5] = {0, 6, 9, 12, 16}, hi[5] = {6, 9, 12, 16, inf};
@@ -193,7 +203,7 @@ TEST(MapMetrics, RangeBandsByDistanceToTheTrueSurface) {
   }
 
   // The whole-map figures do not depend on the bands; without a sensor there are none.
-  const MapMetrics plain = mapMetrics(map, truth, vis);
+  const MapMetrics plain = mapMetrics(map, truthMap(map.grid(), truth), vis);
   EXPECT_TRUE(plain.bands.empty());
   EXPECT_EQ(plain.compared, m.compared);
   EXPECT_EQ(plain.rms_error_m, m.rms_error_m);
@@ -243,7 +253,7 @@ struct OutDir {
   }
 };
 
-bool sameBits(const FloatRaster& a, const perception::MapRaster& b) {
+bool sameBits(const perception::Raster<float>& a, const perception::Raster<float>& b) {
   return a.rows() == b.rows() && a.cols() == b.cols() &&
          std::memcmp(a.data(), b.data(), sizeof(float) * std::size_t(a.size())) == 0;
 }
@@ -251,10 +261,11 @@ bool sameBits(const FloatRaster& a, const perception::MapRaster& b) {
 TEST(MapFiles, RastersReadBackBitForBit) {
   const Case k;
   OutDir out;
-  writeMapFiles(out.dir, "case", k.map, &k.truth, "hand-made case");
+  const perception::ElevationMap case_truth = truthMap(k.map.grid(), k.truth);
+  writeMapFiles(out.dir, "case", k.map, &case_truth, "hand-made case");
   EXPECT_TRUE(sameBits(readTiff(out.dir / "case_elevation.tiff"), k.map.elevation()));
   EXPECT_TRUE(sameBits(readTiff(out.dir / "case_sigma.tiff"), k.map.sigma()));
-  const FloatRaster ceiling = readTiff(out.dir / "case_shadow_ceiling.tiff");
+  const perception::Raster<float> ceiling = readTiff(out.dir / "case_shadow_ceiling.tiff");
   EXPECT_TRUE(sameBits(ceiling, k.map.shadowCeiling()));
   EXPECT_EQ(ceiling(1, 4), 0.75f);           // the shadow cell's ceiling
   EXPECT_TRUE(std::isnan(ceiling(1, 3)));    // a shadow cell without one
@@ -296,7 +307,7 @@ TEST(MapFiles, RowZeroIsNorth) {
   map.setKnown((*cell)(0), (*cell)(1), 7.0f, 0.01f);
   OutDir out;
   writeMapFiles(out.dir, "nw", map, nullptr, "north-west");
-  const FloatRaster z = readTiff(out.dir / "nw_elevation.tiff");
+  const perception::Raster<float> z = readTiff(out.dir / "nw_elevation.tiff");
   EXPECT_EQ(z(0, 0), 7.0f);
   EXPECT_TRUE(std::isnan(z(3, 0)));
   std::ifstream in(out.dir / "nw_meta.json");
@@ -310,10 +321,11 @@ TEST(MapFiles, RowZeroIsNorth) {
 TEST(MapFiles, CartesianFilesAndGridMismatch) {
   const Case k;
   OutDir out;
-  writeCartesianFiles(out.dir, "case", k.map, &k.truth, "hand-made case, Cartesian");
+  const perception::ElevationMap case_truth = truthMap(k.map.grid(), k.truth);
+  writeCartesianFiles(out.dir, "case", k.map, &case_truth, "hand-made case, Cartesian");
   EXPECT_TRUE(sameBits(readTiff(out.dir / "case_cartesian_elevation.tiff"), k.map.elevation()));
   EXPECT_FALSE(cv::imread((out.dir / "case_cartesian_error.png").string()).empty());
-  const sim::ElevationRaster wrong(3, 5);
+  const perception::ElevationMap wrong(perception::MapGrid{-1.0, 2.0, 0.5, 3, 5});
   EXPECT_THROW(writeMapFiles(out.dir, "bad", k.map, &wrong, "x"), std::invalid_argument);
 }
 
@@ -322,7 +334,7 @@ TEST(MapFiles, CartesianFilesAndGridMismatch) {
 TEST(MapFiles, PicturesOfASyntheticMap) {
   const perception::MapGrid grid{-5.0, 8.0, 0.1, 110, 100};
   perception::ElevationMap map(grid);
-  sim::ElevationRaster truth(grid.rows, grid.cols);
+  perception::Raster<float> truth(grid.rows, grid.cols);
   for (int r = 0; r < grid.rows; ++r)
     for (int c = 0; c < grid.cols; ++c) {
       const auto p = grid.center(r, c);
@@ -340,8 +352,9 @@ TEST(MapFiles, PicturesOfASyntheticMap) {
       map.setKnown(r, c, truth(r, c) + float(e), float(sigma));
     }
   OutDir out;
-  writeMapFiles(out.dir, "synthetic", map, &truth, "synthetic view 0");
-  writeCartesianFiles(out.dir, "synthetic", map, &truth, "synthetic view 0, Cartesian");
+  const perception::ElevationMap truth_map = truthMap(grid, truth);
+  writeMapFiles(out.dir, "synthetic", map, &truth_map, "synthetic view 0");
+  writeCartesianFiles(out.dir, "synthetic", map, &truth_map, "synthetic view 0, Cartesian");
   for (const char* name : {"synthetic_elevation.png", "synthetic_error.png", "synthetic_sigma.png",
                            "synthetic_state_view.png", "synthetic_cartesian_error.png"}) {
     const cv::Mat pic = cv::imread((out.dir / name).string(), cv::IMREAD_UNCHANGED);

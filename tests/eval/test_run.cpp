@@ -47,7 +47,7 @@ TEST(Run, WritesEveryScanFileOfTheContract) {
     const fs::path base = run.dir / "scans" / ("view_" + std::to_string(k));
     for (const char* suffix : {"_range.tiff", "_meta.json", ".ply", ".png"})
       EXPECT_TRUE(fs::exists(base.string() + suffix)) << base.string() + suffix;
-    const FloatRaster range = readTiff(base.string() + "_range.tiff");
+    const perception::Raster<float> range = readTiff(base.string() + "_range.tiff");
     ASSERT_EQ(range.rows(), 32);
     ASSERT_EQ(range.cols(), 128);
     long valid = 0;

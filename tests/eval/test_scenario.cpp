@@ -184,10 +184,10 @@ TEST(ScenarioExamples, DemoIsTheDocumentedOne) {
   EXPECT_EQ(s.map->x_m, Eigen::Vector2d(-5, 5));
   EXPECT_EQ(s.map->y_m, Eigen::Vector2d(-3, 8));
   EXPECT_EQ(s.map->epsilon_rad, 1.0e-5);
-  EXPECT_EQ(s.map->shadows, "gnc");
-  EXPECT_EQ(s.map->baseline, "cartesian");
+  EXPECT_EQ(s.map->shadows, perception::ShadowMethod::Gnc);
+  EXPECT_EQ(s.map->baseline, Baseline::Cartesian);
   // The sensor block is the ERIM defaults written out.
-  const SensorSpec erim;
+  const perception::SensorModel erim;
   EXPECT_EQ(s.sensor.rows, erim.rows);
   EXPECT_EQ(s.sensor.cols, erim.cols);
   EXPECT_EQ(s.sensor.fov_v_rad, erim.fov_v_rad);
@@ -252,8 +252,8 @@ TEST(ScenarioDefaults, SensorDefaultsAreTheErimValues) {
   }
   // Writing the defaults out gives the same radians as leaving them out.
   const Scenario written = parseScenario(kMinimal + "sensor: {fov_deg: [30, 80]}\n", kFile);
-  EXPECT_SAME(written.sensor.fov_v_rad, SensorSpec{}.fov_v_rad);
-  EXPECT_SAME(written.sensor.fov_h_rad, SensorSpec{}.fov_h_rad);
+  EXPECT_SAME(written.sensor.fov_v_rad, perception::SensorModel{}.fov_v_rad);
+  EXPECT_SAME(written.sensor.fov_h_rad, perception::SensorModel{}.fov_h_rad);
 }
 
 TEST(ScenarioDefaults, OtherDefaultsAreTheDocumentedOnes) {
@@ -280,8 +280,8 @@ TEST(ScenarioDefaults, OtherDefaultsAreTheDocumentedOnes) {
   EXPECT_EQ(m.map->x_m, Eigen::Vector2d(-5, 5));
   EXPECT_EQ(m.map->y_m, Eigen::Vector2d(-3, 8));
   EXPECT_EQ(m.map->epsilon_rad, 1.0e-5);
-  EXPECT_EQ(m.map->shadows, "gnc");
-  EXPECT_EQ(m.map->baseline, "cartesian");
+  EXPECT_EQ(m.map->shadows, perception::ShadowMethod::Gnc);
+  EXPECT_EQ(m.map->baseline, Baseline::Cartesian);
 
   const Scenario r = parseScenario(
       "name: t\nterrain: {kind: mars, rocks: {}, craters: {}}\nviews: [{xyz_m: [0, 0, 1]}]\n",

@@ -19,8 +19,8 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 
 LocusConfig noiseFree() {
   LocusConfig c;
-  c.noise_k = 0;
-  c.quantization_m = 0;
+  c.sensor.noise_k = 0;
+  c.sensor.quantization_m = 0;
   return c;
 }
 
@@ -244,14 +244,14 @@ TEST(LocusMapper, LanesHandBackWhatTheyCannotFinish) {
   for (int r = 20; r < 26; ++r)
     for (int c = 60; c < 75; ++c) img.range(r, c) = std::numeric_limits<float>::quiet_NaN();
   for (int c = 0; c < img.cols(); c += 7) img.range(40, c) = std::numeric_limits<float>::quiet_NaN();
-  EdgeMask edges = EdgeMask::Zero(img.rows(), img.cols());
+  perception::Raster<std::uint8_t> edges = perception::Raster<std::uint8_t>::Zero(img.rows(), img.cols());
   for (int r = 0; r < img.rows(); ++r)
     for (int c = (r * 13) % 17; c < img.cols(); c += 17) edges(r, c) = 1;
   LocusConfig lanes = noiseFree(), scalar = noiseFree();
   scalar.vectorized = false;
   const LocusMapper fast(img, &edges, lanes), slow(img, &edges, scalar);
   for (const auto isa : {LaneIsa::Avx512, LaneIsa::Avx2}) {
-    LocusMapper::capLaneIsa(isa);
+    const LaneIsaCap cap(isa);
     for (const double cell : {0.03, 0.10, 0.25}) {
       const auto grid = MapGrid::covering(-8, 8, -4, 12, cell);
       long by_lanes = -1;
@@ -272,7 +272,6 @@ TEST(LocusMapper, LanesHandBackWhatTheyCannotFinish) {
       }
     }
   }
-  LocusMapper::capLaneIsa(LaneIsa::Avx512);
 }
 
 }  // namespace ambler::perception

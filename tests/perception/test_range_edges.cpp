@@ -134,14 +134,21 @@ struct Normals {
   }
 };
 
+// The ERIM's default sensor model with ambiguity interval `a`.
+SensorModel interval(double a) {
+  SensorModel s;
+  s.ambiguity_m = a;
+  return s;
+}
+
 // The ERIM measurement without the wrap: ρ + kρ²·n, then whole counts of q.
-void addNoise(RangeImage& image, std::uint64_t seed, const RangeNoise& noise = {}) {
+void addNoise(RangeImage& image, std::uint64_t seed, const SensorModel& noise = {}) {
   Normals normal(seed);
   for (int r = 0; r < image.rows(); ++r)
     for (int c = 0; c < image.cols(); ++c) {
       const double rho = image.range(r, c), n = normal();
       if (!std::isfinite(rho)) continue;
-      const double m = rho + noise.k * rho * rho * n;
+      const double m = rho + noise.noiseSigma(rho) * n;
       image.range(r, c) = float(noise.quantization_m * std::nearbyint(m / noise.quantization_m));
     }
 }
@@ -151,8 +158,8 @@ struct Link {
   int r0, c0, r1, c1;
 };
 template <class Occluding>
-EdgeMask analyticEdges(const Rendered& s, const Occluding& occluding) {
-  EdgeMask truth = EdgeMask::Zero(s.image.rows(), s.image.cols());
+perception::Raster<std::uint8_t> analyticEdges(const Rendered& s, const Occluding& occluding) {
+  perception::Raster<std::uint8_t> truth = perception::Raster<std::uint8_t>::Zero(s.image.rows(), s.image.cols());
   for (int r = 0; r < s.image.rows(); ++r)
     for (int c = 0; c < s.image.cols(); ++c)
       for (const Link l : {Link{r, c, r + 1, c}, Link{r, c, r, c + 1}}) {
@@ -163,7 +170,7 @@ EdgeMask analyticEdges(const Rendered& s, const Occluding& occluding) {
   return truth;
 }
 
-bool near(const EdgeMask& m, int r, int c) {  // any set pixel within one pixel (8-neighbourhood)
+bool near(const perception::Raster<std::uint8_t>& m, int r, int c) {  // any set pixel within one pixel (8-neighbourhood)
   for (int i = std::max(0, r - 1); i <= std::min<int>(m.rows() - 1, r + 1); ++i)
     for (int j = std::max(0, c - 1); j <= std::min<int>(m.cols() - 1, c + 1); ++j)
       if (m(i, j)) return true;
@@ -176,7 +183,7 @@ struct Score {
   double falseFraction() const { return valid ? double(false_pixels) / valid : 0.0; }
 };
 // Detected edge pixels more than one pixel from every analytic edge pixel are false.
-Score score(const EdgeMask& edges, const EdgeMask& truth, const RangeImage& image) {
+Score score(const perception::Raster<std::uint8_t>& edges, const perception::Raster<std::uint8_t>& truth, const RangeImage& image) {
   Score s;
   for (int r = 0; r < edges.rows(); ++r)
     for (int c = 0; c < edges.cols(); ++c) {
@@ -281,8 +288,8 @@ TEST_P(LedgeDrop, EdgeLiesOnTheAnalyticOcclusion) {
         if (s.surface(r, c) == 1 && s.surface(r + 1, c) == 0)
           s.image.range(r, c) = 0.5f * (s.image.range(r, c) + s.image.range(r + 1, c));
   if (lc.noise) addNoise(s.image, 7 + std::uint64_t(lc.y0));
-  const EdgeMask edges = detectRangeEdges(s.image);
-  const EdgeMask truth = analyticEdges(s, [&](const Link& l) {
+  const perception::Raster<std::uint8_t> edges = detectRangeEdges(s.image);
+  const perception::Raster<std::uint8_t> truth = analyticEdges(s, [&](const Link& l) {
     return s.surface(l.r0, l.c0) + s.surface(l.r1, l.c1) == 1;  // near plane next to far plane
   });
   // Recall along the whole edge: in every column that sees both planes, an edge pixel within one
@@ -360,9 +367,9 @@ TEST(RangeEdges, BoxRockSilhouette) {
       View v;
       Rendered s = render(scene, v);
       if (noise) addNoise(s.image, 200 + std::uint64_t(y));
-      const EdgeMask edges = detectRangeEdges(s.image);
+      const perception::Raster<std::uint8_t> edges = detectRangeEdges(s.image);
       auto mixed = [&](const Link& l) { return s.surface(l.r0, l.c0) != s.surface(l.r1, l.c1); };
-      const EdgeMask truth = analyticEdges(
+      const perception::Raster<std::uint8_t> truth = analyticEdges(
           s, [&](const Link& l) { return mixed(l) && silhouette(s, scene, l).occluding; });
       int significant = 0, found = 0;
       for (int r = 0; r < s.image.rows(); ++r)
@@ -400,8 +407,8 @@ TEST(RangeEdges, InvalidPixelsMakeNoEdges) {
   for (int r = 0; r < s.image.rows(); ++r)
     for (int c = 0; c < s.image.cols(); ++c)
       if (u.uniform() < 0.1 || c < 20) s.image.range(r, c) = kNaN, s.surface(r, c) = -1;
-  const EdgeMask edges = detectRangeEdges(s.image);
-  const EdgeMask truth = analyticEdges(s, [&](const Link& l) {
+  const perception::Raster<std::uint8_t> edges = detectRangeEdges(s.image);
+  const perception::Raster<std::uint8_t> truth = analyticEdges(s, [&](const Link& l) {
     return s.surface(l.r0, l.c0) + s.surface(l.r1, l.c1) == 1;
   });
   for (int r = 0; r < s.image.rows(); ++r)
@@ -426,10 +433,10 @@ TEST(RangeEdges, RejectsBadConfig) {
   bad.sweeps = 0;
   EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
   bad = {};
-  bad.noise = {0.0, 0.0};
+  bad.sensor.noise_k = -1;
   EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
   RangeImage copy = image;
-  EXPECT_THROW(unwrapRanges(copy, 0.0), std::invalid_argument);
+  EXPECT_THROW(unwrapRanges(copy, interval(0.0)), std::invalid_argument);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -462,7 +469,7 @@ TEST(UnwrapRanges, PlaneBeyondTheAmbiguityInterval) {
   RangeImage image = s.image;
   const Eigen::MatrixXi folds = wrap(image);
   ASSERT_GT((folds.array() > 0).count(), 1000);
-  const long count = unwrapRanges(image, kA);
+  const long count = unwrapRanges(image, interval(kA));
   long nan = 0;
   for (int r = 0; r < image.rows(); ++r)
     for (int c = 0; c < image.cols(); ++c) {
@@ -479,14 +486,14 @@ TEST(UnwrapRanges, PlaneBeyondTheAmbiguityInterval) {
 
 // The ERIM's measurement of exact ranges, in its order: noise kρ²·n (clamped at 0), the wrap, then
 // whole counts of q (the top count reads 0). Returns each pixel's true multiple of A.
-Eigen::MatrixXi measure(RangeImage& image, std::uint64_t seed, const RangeNoise& noise) {
+Eigen::MatrixXi measure(RangeImage& image, std::uint64_t seed, const SensorModel& noise) {
   Eigen::MatrixXi folds = Eigen::MatrixXi::Zero(image.rows(), image.cols());
   Normals normal(seed);
   for (int r = 0; r < image.rows(); ++r)
     for (int c = 0; c < image.cols(); ++c) {
       const double rho = image.range(r, c), e = normal();
       if (!std::isfinite(rho)) continue;
-      const double m = std::max(0.0, rho + noise.k * rho * rho * e);
+      const double m = std::max(0.0, rho + noise.noiseSigma(rho) * e);
       folds(r, c) = int(std::floor(m / kA));
       const double q = noise.quantization_m;
       double counts = q > 0 ? q * std::nearbyint((m - folds(r, c) * kA) / q) : m - folds(r, c) * kA;
@@ -499,7 +506,8 @@ Eigen::MatrixXi measure(RangeImage& image, std::uint64_t seed, const RangeNoise&
 // With noise and quantisation (noise, then the wrap, then whole counts, as the ERIM measures), each
 // decided pixel gets exactly its true multiple of A.
 TEST(UnwrapRanges, NoisyPlaneGetsTheTrueFolds) {
-  const RangeNoise noise;
+  SensorModel noise;
+  noise.ambiguity_m = kA;
   for (double pitch : {-20.0, -17.0}) {
     View v = farView();
     v.rpy.y() = pitch * kDeg;
@@ -507,7 +515,7 @@ TEST(UnwrapRanges, NoisyPlaneGetsTheTrueFolds) {
     RangeImage image = s.image;
     const Eigen::MatrixXi folds = measure(image, 400, noise);
     const RangeImage measured = image;
-    unwrapRanges(image, kA);
+    unwrapRanges(image, interval(kA));
     long nan = 0, valid = 0;
     for (int r = 0; r < image.rows(); ++r)
       for (int c = 0; c < image.cols(); ++c) {
@@ -546,16 +554,18 @@ TEST(UnwrapRanges, SidewaysPlaneFoldedInTheBottomRows) {
         // z = −x·tan(tilt): the plane through the origin turned about y.
         const Vector3d n(std::sin(tilt * kDeg), 0, std::cos(tilt * kDeg));
         const Rendered s = render(planeScene(n, 0.0), v);
-        const RangeNoise noise{k, 0.0762};
+        SensorModel noise;
+        noise.noise_k = k;
+        noise.ambiguity_m = kA;
         RangeImage image = s.image;
         const Eigen::MatrixXi folds = measure(image, 500 + seed, noise);
         const int bottom = image.rows() - 1;
         ASSERT_GT((folds.row(bottom).array() > 0).count(), 2) << "the bottom row must be folded";
-        unwrapRanges(image, kA, noise);
+        unwrapRanges(image, noise);
         // Continuity accepts the fold within 5√6σ_u of the prediction: a window ≈ 2·5√6·σ(ρ)
         // wide in range, which holds two folds once that reaches A (at k = 1e-3 past ~28 m).
         // Below that every fold of a plane is decided.
-        auto decidable = [&](double t) { return 2 * 5 * std::sqrt(6.0) * noise.sigma(t) < kA; };
+        auto decidable = [&](double t) { return 2 * 5 * std::sqrt(6.0) * noise.rangeSigma(t) < kA; };
         long folded = 0, nan = 0, decidable_folded = 0, decidable_nan = 0;
         for (int r = 0; r < image.rows(); ++r)
           for (int c = 0; c < image.cols(); ++c) {
@@ -567,7 +577,7 @@ TEST(UnwrapRanges, SidewaysPlaneFoldedInTheBottomRows) {
               continue;
             }
             const double t = s.image.range(r, c);
-            EXPECT_LE(std::abs(image.range(r, c) - t), 6 * noise.sigma(t)) << r << " " << c;
+            EXPECT_LE(std::abs(image.range(r, c) - t), 6 * noise.rangeSigma(t)) << r << " " << c;
           }
         EXPECT_GT(decidable_folded, 300);  // hundreds of folded pixels to decide, in every case
         EXPECT_EQ(decidable_nan, 0);
@@ -584,7 +594,7 @@ TEST(UnwrapRanges, AmbiguousCliffBecomesNaN) {
   const Rendered s = render(ledgeScene(13.0, 0.0, -2.0), farView());
   RangeImage image = s.image;
   wrap(image);
-  unwrapRanges(image, kA);
+  unwrapRanges(image, interval(kA));
   long near_ok = 0, far_nan = 0, far = 0;
   for (int r = 0; r < image.rows(); ++r)
     for (int c = 0; c < image.cols(); ++c) {
@@ -609,7 +619,7 @@ TEST(UnwrapRanges, SmallLedgeKeepsItsFarSideAcrossTheFold) {
   const Rendered s = render(ledgeScene(17.0, 0.0, -0.4), v);
   RangeImage image = s.image;
   const Eigen::MatrixXi folds = wrap(image);
-  unwrapRanges(image, kA);
+  unwrapRanges(image, interval(kA));
   long far = 0, far_folded = 0, far_ok = 0;
   for (int r = 0; r < image.rows(); ++r)
     for (int c = 0; c < image.cols(); ++c) {
@@ -630,7 +640,7 @@ TEST(UnwrapRanges, AroundARock) {
   const Rendered s = render(boxScene({-0.6, 9, 0}, {0.6, 9.8, 0.8}), farView());
   RangeImage image = s.image;
   const Eigen::MatrixXi folds = wrap(image);
-  const long count = unwrapRanges(image, kA);
+  const long count = unwrapRanges(image, interval(kA));
   long decided_far = 0, far = 0, wrong = 0;
   for (int r = 0; r < image.rows(); ++r)
     for (int c = 0; c < image.cols(); ++c) {

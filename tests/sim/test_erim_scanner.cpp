@@ -12,7 +12,7 @@
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_kernel.hpp"
 #include "sim/erim_scanner.hpp"
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 #include "terrains/terrain.hpp"
 
 namespace ambler::sim {
@@ -23,8 +23,8 @@ using test::TerrainWorld;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-ErimConfig idealSensor() {
-  ErimConfig c;
+perception::SensorModel idealSensor() {
+  perception::SensorModel c;
   c.noise_k = 0;
   c.quantization_m = 0;
   c.ambiguity_m = 0;
@@ -81,13 +81,13 @@ INSTANTIATE_TEST_SUITE_P(Tilts, TiltedPlane,
 // σ of the range noise is k·ρ²: the sample σ of many draws is within 5 % (the standard error of a
 // sample σ from n normal draws is σ/√(2n): 0.16 % for n = 200 000).
 TEST(MeasureRange, NoiseSigmaIsKRhoSquared) {
-  ErimConfig c = idealSensor();
+  perception::SensorModel c = idealSensor();
   c.noise_k = 0.0003;
   for (double rho : {2.0, 7.5, 15.0, 30.0}) {
     const int n = 200000;
     double sum = 0, sum2 = 0;
     for (int i = 0; i < n; ++i) {
-      const double e = measureRange(rho, terrains::normalFromKey(terrains::streamKey(9, i)), c) - rho;
+      const double e = measureRange(rho, base::normalFromKey(base::streamKey(9, i)), c) - rho;
       sum += e, sum2 += e * e;
     }
     const double mean = sum / n, sigma = std::sqrt(sum2 / n - mean * mean);
@@ -100,7 +100,7 @@ TEST(MeasureRange, NoiseSigmaIsKRhoSquared) {
 // The same through the scanner: normalised errors (ρ − t)/(kt²) over a whole scan have unit σ.
 TEST(ErimScanner, NoisyScanHasSigmaKRhoSquared) {
   const TerrainWorld w(planeTerrain(0, 0, 0));
-  ErimConfig c = idealSensor();
+  perception::SensorModel c = idealSensor();
   c.noise_k = 0.002;  // large enough that float32 casting error (1e-6 m) is negligible
   c.rows = 128;
   const Scan scan = ErimScanner(*w.scene, c).scan(perception::sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}), 5);
@@ -122,7 +122,7 @@ TEST(ErimScanner, NoisyScanHasSigmaKRhoSquared) {
 // 8-bit quantisation: every range is a whole number of counts, within half a count of the truth.
 TEST(ErimScanner, QuantisedRangesAreWholeCounts) {
   const TerrainWorld w(planeTerrain(0.1, 0.05, 0));
-  ErimConfig c = idealSensor();
+  perception::SensorModel c = idealSensor();
   c.quantization_m = 0.0762;
   const Scan scan = ErimScanner(*w.scene, c).scan(perception::sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}), 1);
   int n = 0;
@@ -141,7 +141,7 @@ TEST(ErimScanner, QuantisedRangesAreWholeCounts) {
 TEST(ErimScanner, RangesWrapAtTheAmbiguityInterval) {
   const TerrainWorld w(planeTerrain(0, 0, 0, 30.0, 0.25));
   for (double q : {0.0, 0.0762}) {
-    ErimConfig c = idealSensor();
+    perception::SensorModel c = idealSensor();
     c.ambiguity_m = 19.5;
     c.quantization_m = q;
     c.max_range_m = 60;
@@ -167,7 +167,7 @@ TEST(ErimScanner, RangesWrapAtTheAmbiguityInterval) {
 // Nothing returns from beyond the maximum range; everything closer does.
 TEST(ErimScanner, MaximumRangeCutsReturns) {
   const TerrainWorld w(planeTerrain(0, 0, 0, 30.0, 0.25));
-  ErimConfig c = idealSensor();
+  perception::SensorModel c = idealSensor();
   c.max_range_m = 15;
   const Scan scan = ErimScanner(*w.scene, c).scan(perception::sensorPose({0, -20, 5}, {0, -15 * kDeg, 0}), 1);
   int beyond = 0;
@@ -184,7 +184,7 @@ TEST(ErimScanner, MaximumRangeCutsReturns) {
 // Dropouts remove a fraction p of the returns (binomial: within 5 standard errors).
 TEST(ErimScanner, DropoutFraction) {
   const TerrainWorld w(planeTerrain(0, 0, 0));
-  ErimConfig c = idealSensor();
+  perception::SensorModel c = idealSensor();
   c.dropout = 0.3;
   const Scan scan = ErimScanner(*w.scene, c).scan(perception::sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}), 3);
   int hits = 0, missing = 0;
@@ -207,7 +207,7 @@ TEST(ErimScanner, MixedPixelLiesBetweenTheTwoSurfaces) {
     <geom type="box" size="20 0.05 20" pos="0 10.05 0"/>
   </worldbody>
 </mujoco>)");
-  ErimConfig c = idealSensor();
+  perception::SensorModel c = idealSensor();
   c.mixed_pixels = true;
   c.rows = 8;
   c.cols = 64;
@@ -238,7 +238,7 @@ TEST(ErimScanner, MixedPixelLiesBetweenTheTwoSurfaces) {
 // Same seed: identical bits, whatever the number of threads; another seed: other noise.
 TEST(ErimScanner, DeterministicAcrossThreadCounts) {
   const TerrainWorld w(planeTerrain(0.05, 0.1, 0));
-  ErimConfig c;  // ERIM defaults: noise, quantisation, wrap, mixed pixels
+  perception::SensorModel c;  // ERIM defaults: noise, quantisation, wrap, mixed pixels
   const ErimScanner scanner(*w.scene, c);
   const auto T = perception::sensorPose({0, -6, 3}, {0, -30 * kDeg, 0});
   const Scan a = scanner.scan(T, 42);
@@ -273,10 +273,10 @@ TEST(ErimScanner, VectorAndScalarKernelsGiveIdenticalBits) {
     <geom type="capsule" size="0.2 0.5" pos="0 7 0.5" euler="90 0 0"/>
   </worldbody>
 </mujoco>)");
-  ErimConfig defaults;  // ERIM defaults: mixed pixels, noise, quantisation, wrap
+  perception::SensorModel defaults;  // ERIM defaults: mixed pixels, noise, quantisation, wrap
   defaults.rows = 61;   // neither a multiple of 4: partial tiles on two edges
   defaults.cols = 203;
-  ErimConfig single = idealSensor();
+  perception::SensorModel single = idealSensor();
   single.rows = 64;
   single.cols = 256;
   single.noise_k = 0.01;  // large noise and a short interval: many draws matter, many wraps
@@ -287,7 +287,7 @@ TEST(ErimScanner, VectorAndScalarKernelsGiveIdenticalBits) {
   const auto T = perception::sensorPose({0.3, -5, 2.5}, {4 * kDeg, -25 * kDeg, 7 * kDeg});
   int compared = 0;
   for (const RayScene* scene : {terrain.scene.get(), primitives.scene.get()})
-    for (const ErimConfig& c : {defaults, single}) {
+    for (const perception::SensorModel& c : {defaults, single}) {
       const ErimScanner scanner(*scene, c);
       kernel::forceScalar(false);
       const Scan vec = scanner.scan(T, 11);

@@ -8,7 +8,7 @@
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
 #include "sim/ground_truth.hpp"
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 
 namespace ambler::sim {
 namespace {
@@ -20,7 +20,7 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 
 terrains::Terrain randomHeightfield(std::uint64_t seed) {
   terrains::Terrain t{terrains::Heightfield(81, 101, 0.1, {-5.0, -4.0}), {}};
-  terrains::Rng rng(seed);
+  base::Rng rng(seed);
   for (int r = 0; r < t.ground.rows(); ++r)
     for (int c = 0; c < t.ground.cols(); ++c) t.ground.at(r, c) = rng.uniform(-0.5, 0.5);
   return t;
@@ -32,7 +32,7 @@ TEST(GroundTruth, HeightfieldQueryEqualsVerticalMjRay) {
   const terrains::Terrain terrain = randomHeightfield(3);
   const TerrainWorld w(terrain);
   const GroundTruth truth(*w.scene);
-  terrains::Rng rng(11);
+  base::Rng rng(11);
   const double z_top = 5.0;
   for (int i = 0; i < 5000; ++i) {
     const double x = rng.uniform(-4.99, 4.99), y = rng.uniform(-3.99, 3.99);
@@ -52,14 +52,15 @@ TEST(GroundTruth, WatertightOnGridAlignedRays) {
   const TerrainWorld w(test::planeTerrain(a, b, 0.0, 10.0, 0.05));
   const GroundTruth truth(*w.scene);
   const auto grid = perception::MapGrid::covering(-5, 5, -3, 8, 0.1);
-  const auto z = truth.elevation(grid);
+  const perception::ElevationMap truth_map = truth.elevation(grid);
+  const auto& z = truth_map.elevation();
   for (int r = 0; r < grid.rows; ++r)
     for (int c = 0; c < grid.cols; ++c) {
       const Eigen::Vector2d p = grid.center(r, c);
       ASSERT_NEAR(z(r, c), a * p.x() + b * p.y(), 1e-5) << p.transpose();
     }
-  ErimConfig cfg;
-  const auto vis = truth.visibility(grid, z, perception::sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}), cfg);
+  perception::SensorModel cfg;
+  const auto vis = truth.visibility(truth_map, perception::sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}), cfg);
   int visible = 0;
   for (int i = 0; i < vis.size(); ++i) {
     ASSERT_NE(Visibility(vis.data()[i]), Visibility::Hidden) << "cell " << i;
@@ -74,7 +75,7 @@ TEST(RayScene, AgreesWithMjRayOnEveryRayOfAFractalScanWithRocks) {
   const terrains::Terrain terrain = terrains::makeTerrain(test::fractalWithRocks(), 7);
   ASSERT_GT(terrain.rocks.size(), 20u);
   const TerrainWorld w(terrain);
-  ErimConfig c;
+  perception::SensorModel c;
   c.noise_k = 0, c.quantization_m = 0, c.ambiguity_m = 0, c.mixed_pixels = false;
   const auto T = perception::sensorPose({0, -5, 2.5}, {0, -25 * kDeg, 0});
   const Scan scan = ErimScanner(*w.scene, c).scan(T, 1);
@@ -119,7 +120,7 @@ TEST(RayScene, AgreesWithMjRayOnEveryGeomType) {
   </worldbody>
 </mujoco>)",
                     {{"hf.bin", test::hfieldFile(3, 4, {0, 1, 0, 2, 1, 0, 2, 1, 3, 0, 1, 2})}});
-  terrains::Rng rng(5);
+  base::Rng rng(5);
   int hits = 0;
   for (int i = 0; i < 20000; ++i) {
     const Eigen::Vector3d o(rng.uniform(-4, 4), rng.uniform(-4, 4), rng.uniform(1.5, 4));
@@ -149,12 +150,12 @@ TEST(GroundTruth, WallCastsTheAnalyticShadow) {
 </mujoco>)");
   const GroundTruth truth(*w.scene);
   const auto grid = perception::MapGrid::covering(-4, 4, 1, 12, 0.1);
-  const auto z = truth.elevation(grid);
-  ErimConfig c;
+  const perception::ElevationMap truth_map = truth.elevation(grid);
+  perception::SensorModel c;
   c.fov_h_rad = 100 * kDeg;
   c.fov_v_rad = 60 * kDeg;
   const auto T = perception::sensorPose({0, 0, 2}, {0, -20 * kDeg, 0});
-  const auto vis = truth.visibility(grid, z, T, c);
+  const auto vis = truth.visibility(truth_map, T, c);
   int hidden = 0, visible = 0;
   for (int r = 0; r < grid.rows; ++r)
     for (int col = 0; col < grid.cols; ++col) {

@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "terrains/convex_hull.hpp"
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 
 namespace ambler::terrains {
 namespace {
@@ -41,7 +41,7 @@ void expectContains(const HullMesh& m, const std::vector<Eigen::Vector3d>& point
 TEST(ConvexHull, CubeWithInteriorAndFacePoints) {
   std::vector<Eigen::Vector3d> points;
   for (int i = 0; i < 8; ++i) points.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-  Rng rng(5);
+  base::Rng rng(5);
   for (int i = 0; i < 50; ++i) points.emplace_back(rng.uniform(), rng.uniform(), rng.uniform());
   for (int i = 0; i < 20; ++i) points.emplace_back(rng.uniform(), rng.uniform(), 1.0);
   const HullMesh hull = convexHull(points);
@@ -55,7 +55,7 @@ TEST(ConvexHull, CubeWithInteriorAndFacePoints) {
 }
 
 TEST(ConvexHull, PointsOnASphereAreAllVertices) {
-  Rng rng(6);
+  base::Rng rng(6);
   std::vector<Eigen::Vector3d> points;
   for (int i = 0; i < 300; ++i)
     points.push_back(Eigen::Vector3d(rng.normal(), rng.normal(), rng.normal()).normalized());
@@ -73,7 +73,7 @@ TEST(ConvexHull, PointsOnASphereAreAllVertices) {
 }
 
 TEST(ConvexHull, ContainsRandomClouds) {
-  Rng rng(7);
+  base::Rng rng(7);
   for (int trial = 0; trial < 200; ++trial) {
     std::vector<Eigen::Vector3d> points;
     const int n = 4 + int(rng.below(80));
@@ -96,7 +96,7 @@ TEST(ConvexHull, RejectsDegenerateInput) {
 }
 
 TEST(ConvexHullArea, MatchesClosedForms) {
-  Rng rng(8);
+  base::Rng rng(8);
   std::vector<Eigen::Vector2d> square{{0, 0}, {2, 0}, {2, 3}, {0, 3}, {0, 1.5}};
   for (int i = 0; i < 100; ++i) square.emplace_back(rng.uniform(0, 2), rng.uniform(0, 3));
   EXPECT_NEAR(convexHullArea(square), 6.0, 1e-12);

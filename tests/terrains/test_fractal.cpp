@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "terrains/fractal.hpp"
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 #include "terrains/terrain.hpp"
 
 namespace ambler::terrains {

@@ -5,12 +5,12 @@
 #include <stdexcept>
 
 #include "terrains/heightfield.hpp"
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 
 namespace ambler::terrains {
 namespace {
 
-Heightfield randomField(int rows, int cols, double cell, Eigen::Vector2d origin, Rng& rng) {
+Heightfield randomField(int rows, int cols, double cell, Eigen::Vector2d origin, base::Rng& rng) {
   Heightfield hf(rows, cols, cell, origin);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c) hf.at(r, c) = rng.uniform(-1.0, 1.0);
@@ -34,7 +34,7 @@ std::optional<double> onTriangle(const Heightfield& hf, const std::array<Eigen::
 }
 
 TEST(Heightfield, ReproducesAnyPlaneExactly) {
-  Rng rng(1);
+  base::Rng rng(1);
   for (int trial = 0; trial < 20; ++trial) {
     const double z0 = rng.uniform(-5, 5), gx = rng.uniform(-3, 3), gy = rng.uniform(-3, 3);
     Heightfield hf(7, 9, 0.3, {-1.2, 0.7});
@@ -51,7 +51,7 @@ TEST(Heightfield, ReproducesAnyPlaneExactly) {
 }
 
 TEST(Heightfield, InterpolatesOnMuJoCoTriangles) {
-  Rng rng(2);
+  base::Rng rng(2);
   const Heightfield hf = randomField(6, 11, 0.17, {-0.9, -0.4}, rng);
   for (int i = 0; i < 20000; ++i) {
     const Eigen::Vector2d p(rng.uniform(hf.xMin(), hf.xMax()), rng.uniform(hf.yMin(), hf.yMax()));
@@ -67,7 +67,7 @@ TEST(Heightfield, InterpolatesOnMuJoCoTriangles) {
 }
 
 TEST(Heightfield, ReturnsSamplesAtGridPoints) {
-  Rng rng(3);
+  base::Rng rng(3);
   // A dyadic cell and origin make the positions exact, so the samples must come back bit for bit.
   const Heightfield exact = randomField(5, 8, 0.25, {-1.0, 0.5}, rng);
   for (int r = 0; r < exact.rows(); ++r)
@@ -85,7 +85,7 @@ TEST(Heightfield, ReturnsSamplesAtGridPoints) {
 }
 
 TEST(Heightfield, ReturnsNulloptOutside) {
-  Rng rng(4);
+  base::Rng rng(4);
   const Heightfield hf = randomField(4, 5, 0.5, {-1.0, -0.75}, rng);
   const double e = 1e-9;
   EXPECT_FALSE(hf.height(hf.xMin() - e, 0.0));

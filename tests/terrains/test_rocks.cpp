@@ -7,7 +7,7 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 #include "terrains/rocks.hpp"
 #include "terrains/terrain.hpp"
 
@@ -75,7 +75,7 @@ TEST(RockModel, NumberDensityMatchesDirectQuadrature) {
 
 TEST(RockModel, StratifiedDiametersAreSortedAndInRange) {
   const RockSpec spec{0.1, 0.1, 1.0};
-  Rng rng(3);
+  base::Rng rng(3);
   const auto d = sampleRockDiameters(spec, 100.0, rng);
   EXPECT_EQ(long(d.size()), std::lround(100.0 * rockNumberDensity(spec)));
   for (std::size_t i = 0; i < d.size(); ++i) {
@@ -89,7 +89,7 @@ TEST(RockModel, StratifiedDiametersAreSortedAndInRange) {
 }
 
 TEST(RockShape, ConvexClosedOutwardWithExactFootprint) {
-  Rng rng(11);
+  base::Rng rng(11);
   for (int i = 0; i < 500; ++i) {
     const double d = rng.uniform(0.05, 2.0);
     const Rock rock = makeRockShape(d, rng);

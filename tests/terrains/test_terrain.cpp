@@ -6,7 +6,7 @@
 #include <stdexcept>
 
 #include "terrains/craters.hpp"
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 #include "terrains/terrain.hpp"
 
 namespace ambler::terrains {

@@ -14,7 +14,7 @@
 #include <string>
 
 #include "eval/map_metrics.hpp"
-#include "eval/mapping.hpp"
+#include "perception/scan_to_map.hpp"
 #include "eval/runner.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
@@ -63,29 +63,31 @@ std::unique_ptr<Scene> dropScene(double drop_m) {
 
 // One view mapped and the ground truth on the same grid.
 struct Mapped {
-  MapBuild build;
-  sim::ElevationRaster z;
-  sim::VisibilityRaster vis;
+  perception::ScanMap build;
+  perception::ElevationMap truth;
+  perception::Raster<float> z;  // truth's elevations
+  perception::Raster<std::uint8_t> vis;
   MapMetrics metrics;
   perception::MapGrid grid;
   Eigen::Vector3d sensor;
 };
 
-Mapped mapView(const Scene& s, const SensorSpec& sensor, const ViewSpec& view, const MapSpec& map, std::uint64_t seed) {
+Mapped mapView(const Scene& s, const perception::SensorModel& sensor, const ViewSpec& view, const MapSpec& map, std::uint64_t seed) {
   Mapped m;
-  const sim::ErimConfig cfg = erimConfig(sensor);
-  const sim::Scan scan = sim::ErimScanner(*s.scene, cfg).scan(perception::sensorPose(view.xyz_m, view.rpy_rad), seed);
-  m.grid = mapGrid(map);
-  m.z = s.truth->elevation(m.grid);
-  m.vis = s.truth->visibility(m.grid, m.z, scan.image.T_WS, cfg);
-  m.build = buildLocusMap(scan.image, map, sensor);
-  m.metrics = mapMetrics(m.build.locus, m.z, m.vis);
+  const Eigen::Isometry3d T_WS = perception::sensorPose(view.xyz_m, view.rpy_rad);
+  const sim::Scan scan = sim::ErimScanner(*s.scene, sensor).scan(T_WS, seed);
+  m.grid = map.grid();
+  m.truth = s.truth->elevation(m.grid);
+  m.z = m.truth.elevation();
+  m.vis = s.truth->visibility(m.truth, T_WS, sensor);
+  m.build = perception::scanToMap(scan.image, sensor, T_WS, m.grid, map.scanToMapConfig());
+  m.metrics = mapMetrics(m.build.map, m.truth, m.vis);
   m.sensor = view.xyz_m;
   return m;
 }
 
-SensorSpec noiseFree() {
-  SensorSpec s;
+perception::SensorModel noiseFree() {
+  perception::SensorModel s;
   s.noise_k = 0, s.quantization_m = 0, s.mixed_pixels = false;
   return s;
 }
@@ -120,10 +122,10 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
             MapSpec map;
             map.x_m = {-8, d};
             map.y_m = {-5, 5};
-            const SensorSpec sensor = ideal ? noiseFree() : SensorSpec{};
+            const perception::SensorModel sensor = ideal ? noiseFree() : perception::SensorModel{};
             const Mapped m = mapView(*scene, sensor, view, map, 11);
-            const auto& state = m.build.locus.state();
-            const auto& ceiling = m.build.locus.shadowCeiling();
+            const auto& state = m.build.map.state();
+            const auto& ceiling = m.build.map.shadowCeiling();
             long lip_in_shadow = 0, ceiling_below_truth = 0, ceilings = 0;
             for (int r = 0; r < m.grid.rows; ++r)
               for (int c = 0; c < m.grid.cols; ++c) {
@@ -180,7 +182,7 @@ TEST(MapEdges, ShadowCeilingsBehindRocksAreAboveTheSurface) {
   t.craters = terrains::CraterSpec{10, 1.5, 8.0, 2.0};
   s->world = std::make_unique<sim::World>(sim::World::load(sim::writeWorld(terrains::makeTerrain(t, 11), s->tmp.path(), "t")));
   s->build();
-  SensorSpec sensor;
+  perception::SensorModel sensor;
   sensor.mixed_pixels = false;
   long shadow_with_ceiling = 0;
   for (const double x : {-3.0, 0.0, 3.0}) {
@@ -191,8 +193,8 @@ TEST(MapEdges, ShadowCeilingsBehindRocksAreAboveTheSurface) {
     map.x_m = {-6, 6};
     map.y_m = {-5, 10};
     const Mapped m = mapView(*s, sensor, view, map, 21);
-    const auto& state = m.build.locus.state();
-    const auto& ceiling = m.build.locus.shadowCeiling();
+    const auto& state = m.build.map.state();
+    const auto& ceiling = m.build.map.shadowCeiling();
     long below = 0;
     for (int r = 0; r < m.grid.rows; ++r)
       for (int c = 0; c < m.grid.cols; ++c)
@@ -239,9 +241,9 @@ TEST(MapEdges, KnownCellsAreTheTopOfWhatIsThere) {
     map.x_m = {-2.5, 2.5};
     map.y_m = {-0.5, 3};
     const Mapped m = mapView(*scene, noiseFree(), view, map, 5);
-    const auto& state = m.build.locus.state();
-    const auto& zm = m.build.locus.elevation();
-    const auto& sig = m.build.locus.sigma();
+    const auto& state = m.build.map.state();
+    const auto& zm = m.build.map.elevation();
+    const auto& sig = m.build.map.sigma();
     long known = 0, beyond = 0, floor_under_table = 0, under_table_known = 0;
     double worst = 0;
     for (int r = 0; r < m.grid.rows; ++r)

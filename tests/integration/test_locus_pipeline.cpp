@@ -12,7 +12,7 @@
 #include <string>
 
 #include "eval/map_metrics.hpp"
-#include "eval/mapping.hpp"
+#include "perception/scan_to_map.hpp"
 #include "eval/runner.hpp"
 #include "perception/range_edges.hpp"
 #include "perception/sensor_geometry.hpp"
@@ -46,15 +46,17 @@ struct Bench {
     fs::remove_all(dir, ec);
   }
   // Scan from `view`, map, and score against ground truth.
-  MapMetrics run(const SensorSpec& sensor, const ViewSpec& view, const MapSpec& map, std::uint64_t seed,
-                 MapBuild* keep = nullptr, const perception::LocusConfig* config = nullptr) const {
-    const sim::ErimConfig cfg = erimConfig(sensor);
-    const sim::Scan scan = sim::ErimScanner(*scene, cfg).scan(perception::sensorPose(view.xyz_m, view.rpy_rad), seed);
-    const auto grid = mapGrid(map);
-    const auto z = truth->elevation(grid);
-    const auto vis = truth->visibility(grid, z, scan.image.T_WS, cfg);
-    MapBuild b = buildLocusMap(scan.image, map, sensor, config);
-    const MapMetrics m = mapMetrics(b.locus, z, vis);
+  MapMetrics run(const perception::SensorModel& sensor, const ViewSpec& view, const MapSpec& map, std::uint64_t seed,
+                 perception::ScanMap* keep = nullptr, const perception::LocusConfig* config = nullptr) const {
+    const Eigen::Isometry3d T_WS = perception::sensorPose(view.xyz_m, view.rpy_rad);
+    const sim::Scan scan = sim::ErimScanner(*scene, sensor).scan(T_WS, seed);
+    const auto grid = map.grid();
+    const perception::ElevationMap z = truth->elevation(grid);
+    const auto vis = truth->visibility(z, T_WS, sensor);
+    perception::ScanToMapConfig c = map.scanToMapConfig();
+    if (config) c.locus = *config;
+    perception::ScanMap b = perception::scanToMap(scan.image, sensor, T_WS, grid, c);
+    const MapMetrics m = mapMetrics(b.map, z, vis);
     if (keep) *keep = std::move(b);
     return m;
   }
@@ -94,7 +96,7 @@ TEST(LocusPipeline, LedgeCastsAShadowThatTheMapFinds) {
     map.x_m = {-6, 4};
     map.y_m = {-4, 4};
     for (const bool noisy : {false, true}) {
-      SensorSpec sensor;
+      perception::SensorModel sensor;
       sensor.mixed_pixels = false;
       if (!noisy) sensor.noise_k = 0, sensor.quantization_m = 0;
       const MapMetrics m = bench.run(sensor, view, map, 3);
@@ -128,7 +130,7 @@ terrains::TerrainSpec fractal() {
 // within 1σ_z of the truth and 93–97 % within 2σ_z (a normal distribution gives 68.3 % and 95.4 %).
 TEST(LocusPipeline, SigmaIsCalibratedOnNoisyFractalTerrain) {
   const Bench bench(fractal(), 2);
-  SensorSpec sensor;  // ERIM defaults: noise k = 3e-4, quantisation 7.62 cm, wrap at 19.5 m
+  perception::SensorModel sensor;  // ERIM defaults: noise k = 3e-4, quantisation 7.62 cm, wrap at 19.5 m
   sensor.mixed_pixels = false;  // a separate effect, outside the σ model (docs/locus.md)
   ViewSpec view;
   view.xyz_m = {0, -6, 3};
@@ -151,7 +153,7 @@ TEST(LocusPipeline, SigmaIsCalibratedOnNoisyFractalTerrain) {
 // within a few percent of 1.
 TEST(LocusPipeline, SigmaMatchesMonteCarloSpread) {
   const Bench bench(fractal(), 4);
-  SensorSpec sensor;
+  perception::SensorModel sensor;
   sensor.mixed_pixels = false;
   sensor.quantization_m = 0;  // quantisation is not independent between scans at small noise
   sensor.noise_k = 1e-3;
@@ -159,21 +161,21 @@ TEST(LocusPipeline, SigmaMatchesMonteCarloSpread) {
   view.xyz_m = {0, -6, 3};
   view.rpy_rad = {0, -30 * kDeg, 0};
   MapSpec map;
-  map.shadows = "none";
+  map.shadows = perception::ShadowMethod::None;
   map.cell_m = 0.2;
   const int n = 60;
-  const auto grid = mapGrid(map);
+  const auto grid = map.grid();
   Eigen::ArrayXXd sum = Eigen::ArrayXXd::Zero(grid.rows, grid.cols), sum2 = sum, sigma = sum, count = sum;
-  perception::LocusConfig noise_only = locusConfig(map, sensor);
+  perception::LocusConfig noise_only = map.scanToMapConfig().locus;
   noise_only.roughness = false;
   for (int k = 0; k < n; ++k) {
-    MapBuild b;
+    perception::ScanMap b;
     bench.run(sensor, view, map, 100 + k, &b, &noise_only);
     for (int r = 0; r < grid.rows; ++r)
       for (int c = 0; c < grid.cols; ++c) {
-        if (b.locus.stateAt(r, c) != perception::CellState::Known) continue;
-        const double z = b.locus.elevation()(r, c);
-        sum(r, c) += z, sum2(r, c) += z * z, sigma(r, c) += b.locus.sigma()(r, c), count(r, c) += 1;
+        if (b.map.stateAt(r, c) != perception::CellState::Known) continue;
+        const double z = b.map.elevation()(r, c);
+        sum(r, c) += z, sum2(r, c) += z * z, sigma(r, c) += b.map.sigma()(r, c), count(r, c) += 1;
       }
   }
   double ratio_sum = 0;
@@ -201,23 +203,23 @@ TEST(LocusPipeline, LanesGiveTheScalarSearchsBits) {
   terrains::TerrainSpec mars;
   mars.kind = terrains::TerrainKind::Mars;
   const Bench bench(mars, 3);
-  SensorSpec sensor;  // ERIM defaults: noise, quantisation, wrap, mixed pixels
+  perception::SensorModel sensor;  // ERIM defaults: noise, quantisation, wrap, mixed pixels
   for (const Eigen::Vector3d& rpy : {Eigen::Vector3d(0, -30 * kDeg, 0), Eigen::Vector3d(4 * kDeg, -25 * kDeg, 20 * kDeg)}) {
-    const sim::Scan scan = sim::ErimScanner(*bench.scene, erimConfig(sensor))
+    const sim::Scan scan = sim::ErimScanner(*bench.scene, sensor)
                                .scan(perception::sensorPose({0.5, -6, 3}, rpy), 11);
     MapSpec spec;
     perception::RangeImage image = scan.image;
-    perception::unwrapRanges(image, sensor.ambiguity_m);
-    const perception::EdgeMask edges = perception::detectRangeEdges(image);
-    perception::LocusConfig lanes = locusConfig(spec, sensor), scalar = lanes;
+    perception::unwrapRanges(image, sensor);
+    const perception::Raster<std::uint8_t> edges = perception::detectRangeEdges(image);
+    perception::LocusConfig lanes = spec.scanToMapConfig().locus, scalar = lanes;
     scalar.vectorized = false;
     const perception::LocusMapper fast(image, &edges, lanes), slow(image, &edges, scalar);
     for (const auto isa : {perception::LaneIsa::Avx512, perception::LaneIsa::Avx2}) {
-      perception::LocusMapper::capLaneIsa(isa);
+      const perception::LaneIsaCap cap(isa);
       const auto active = perception::LocusMapper::laneIsa();
       for (const double cell : {0.02, 0.05, 0.10, 0.20}) {
         spec.cell_m = cell;
-        const auto grid = mapGrid(spec);
+        const auto grid = spec.grid();
         long by_lanes = -1;
         const auto a = fast.map(grid, &by_lanes), b = slow.map(grid);
         long known = 0, differ = 0;
@@ -237,7 +239,6 @@ TEST(LocusPipeline, LanesGiveTheScalarSearchsBits) {
         else EXPECT_EQ(by_lanes, 0) << what;
       }
     }
-    perception::LocusMapper::capLaneIsa(perception::LaneIsa::Avx512);
   }
 }
 
@@ -248,7 +249,7 @@ TEST(LocusPipeline, WrappedFarFieldIsUnwrappedOrUnknown) {
   flat.cell_m = 0.2;
   flat.relief_m = 0.3;
   const Bench bench(flat, 6);
-  SensorSpec sensor;
+  perception::SensorModel sensor;
   sensor.mixed_pixels = false;
   ViewSpec view;
   view.xyz_m = {0, -25, 4};
@@ -257,20 +258,21 @@ TEST(LocusPipeline, WrappedFarFieldIsUnwrappedOrUnknown) {
   map.cell_m = 0.25;
   map.x_m = {-10, 10};
   map.y_m = {-20, 20};  // ranges from ~7 m out to ~45 m
-  MapBuild b;
+  perception::ScanMap b;
   const MapMetrics m = bench.run(sensor, view, map, 8, &b);
   EXPECT_LT(m.max_abs_error_m, 1.0) << "a cell was mapped at a wrapped range";
   // Cells beyond the interval that are known are right.
-  const auto grid = mapGrid(map);
-  const auto z = bench.truth->elevation(grid);
+  const auto grid = map.grid();
+  const perception::ElevationMap truth_map = bench.truth->elevation(grid);
+  const auto& z = truth_map.elevation();
   int far_known = 0;
   for (int r = 0; r < grid.rows; ++r)
     for (int c = 0; c < grid.cols; ++c) {
       const Eigen::Vector2d xy = grid.center(r, c);
       const double range = (Eigen::Vector3d(xy.x(), xy.y(), z(r, c)) - view.xyz_m).norm();
-      if (range < 19.5 + 1 || b.locus.stateAt(r, c) != perception::CellState::Known) continue;
+      if (range < 19.5 + 1 || b.map.stateAt(r, c) != perception::CellState::Known) continue;
       ++far_known;
-      EXPECT_NEAR(b.locus.elevation()(r, c), z(r, c), 0.5);
+      EXPECT_NEAR(b.map.elevation()(r, c), z(r, c), 0.5);
     }
   RecordProperty("far_known_cells", std::to_string(far_known));
   RecordProperty("unwrapped_pixels", std::to_string(b.unwrapped));

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <numbers>
 
-namespace ambler::terrains {
+namespace ambler::base {
 
 // SplitMix64 finaliser: a strong 64-bit mix, the basis of the counter-based draws below.
 constexpr std::uint64_t mix64(std::uint64_t z) {
@@ -66,4 +66,4 @@ struct ZigguratTables {
 };
 const ZigguratTables& zigguratTables();
 
-}  // namespace ambler::terrains
+}  // namespace ambler::base

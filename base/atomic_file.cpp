@@ -1,11 +1,11 @@
-#include "sim/atomic_file.hpp"
+#include "base/atomic_file.hpp"
 
 #include <cstdio>
 #include <stdexcept>
 #include <string>
 #include <unistd.h>
 
-namespace ambler::sim {
+namespace ambler::base {
 
 void writeFileAtomic(const std::filesystem::path& path, std::string_view bytes) {
   const auto tmp = path.string() + ".tmp" + std::to_string(::getpid());
@@ -24,4 +24,4 @@ void writeFileAtomic(const std::filesystem::path& path, std::string_view bytes) 
   }
 }
 
-}  // namespace ambler::sim
+}  // namespace ambler::base

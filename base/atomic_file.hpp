@@ -4,9 +4,9 @@
 #include <filesystem>
 #include <string_view>
 
-namespace ambler::sim {
+namespace ambler::base {
 
 // Throws std::runtime_error naming the path if the file cannot be written.
 void writeFileAtomic(const std::filesystem::path& path, std::string_view bytes);
 
-}  // namespace ambler::sim
+}  // namespace ambler::base

@@ -1,9 +1,9 @@
 // Unwrapping where the near field itself is folded, through the simulator and against its ground
 // truth: the plane of scenarios/experiments/plane_base.yaml tilted 45° sideways. Its side that falls
 // away is beyond the 19.5 m ambiguity interval already in the bottom rows of the image, so those
-// rows cannot all be taken as unfolded. Before the fix they were, and ~10 pixels per scan kept
-// their wrapped ranges (0.1–4.5 m instead of 19.6–24 m); the locus map put up to 33 cells 0.9–2.4 m
-// above the plane from them (docs/experiments/locus_vs_cartesian.md, "The ambiguity edge").
+// rows cannot all be taken as unfolded; taking them so leaves ~10 pixels per scan at their wrapped
+// ranges (0.1–4.5 m instead of 19.6–24 m), and the locus map puts up to 33 cells 0.9–2.4 m above
+// the plane from them (docs/experiments/locus_vs_cartesian.md, "The ambiguity edge").
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -13,7 +13,7 @@
 #include <numbers>
 #include <string>
 
-#include "eval/mapping.hpp"
+#include "perception/scan_to_map.hpp"
 #include "eval/runner.hpp"
 #include "perception/range_edges.hpp"
 #include "perception/sensor_geometry.hpp"
@@ -88,28 +88,28 @@ TEST(UnwrapSideways, FoldedNearFieldIsUnwrappedAndMappedRight) {
   map.cell_m = 0.10;
   map.x_m = {-8, 12};  // plane_base's region, widened to the terrain's edge on the falling side
   map.y_m = {-2.5, 12};
-  const auto grid = eval::mapGrid(map);
-  const auto z_true = plane.truth.elevation(grid);
+  const auto grid = map.grid();
+  const perception::ElevationMap truth_map = plane.truth.elevation(grid);
+  const auto& z_true = truth_map.elevation();
   const double a = 19.5;
   for (const NoiseCase nc : {NoiseCase{0.0, 1}, NoiseCase{3e-4, 1}, NoiseCase{3e-4, 2}, NoiseCase{3e-4, 3},
                              NoiseCase{1e-3, 1}, NoiseCase{1e-3, 2}, NoiseCase{1e-3, 3}}) {
     SCOPED_TRACE("k " + std::to_string(nc.k) + " seed " + std::to_string(nc.seed));
-    eval::SensorSpec sensor;  // the ERIM: 8-bit counts, wrap at 19.5 m
+    perception::SensorModel sensor;  // the ERIM: 8-bit counts, wrap at 19.5 m
     sensor.noise_k = nc.k;
     sensor.mixed_pixels = false;
-    const sim::ErimConfig cfg = eval::erimConfig(sensor);
-    const sim::Scan scan = sim::ErimScanner(plane.scene, cfg)
-                               .scan(perception::sensorPose(view.xyz_m, view.rpy_rad), eval::viewSeed(nc.seed, 0));
+    const Eigen::Isometry3d T_WS = perception::sensorPose(view.xyz_m, view.rpy_rad);
+    const sim::Scan scan = sim::ErimScanner(plane.scene, sensor).scan(T_WS, eval::viewSeed(nc.seed, 0));
     const perception::RangeImage& measured = scan.image;
     const int rows = measured.rows(), cols = measured.cols();
-    const eval::MapBuild b = eval::buildLocusMap(measured, map, sensor);
+    const perception::ScanMap b = perception::scanToMap(measured, sensor, T_WS, grid, map.scanToMapConfig());
 
     // The situation: the bottom row has pixels past the interval.
     int bottom_folded = 0;
     for (int c = 0; c < cols; ++c) bottom_folded += measured.valid(rows - 1, c) && scan.true_range(rows - 1, c) > a;
     ASSERT_GT(bottom_folded, 2);
 
-    const perception::RangeNoise noise{nc.k, sensor.quantization_m};
+    const perception::SensorModel& noise = sensor;
     long valid = 0, nan = 0, far = 0, wrong = 0;
     for (int r = 0; r < rows; ++r)
       for (int c = 0; c < cols; ++c) {
@@ -121,7 +121,7 @@ TEST(UnwrapSideways, FoldedNearFieldIsUnwrappedAndMappedRight) {
           ++nan;
           continue;
         }
-        if (std::abs(u - t) > 6 * noise.sigma(t)) {
+        if (std::abs(u - t) > 6 * noise.rangeSigma(t)) {
           ++wrong;
           ADD_FAILURE() << "pixel " << r << " " << c << ": true " << t << " m, measured " << measured.range(r, c)
                         << " m, unwrapped " << u << " m";
@@ -137,16 +137,16 @@ TEST(UnwrapSideways, FoldedNearFieldIsUnwrappedAndMappedRight) {
     auto folded = [&](int r, int c) {
       if (r < 0 || r >= rows || c < 0 || c >= cols) return false;
       const double t = scan.true_range(r, c);
-      return std::isfinite(t) && t > a - 6 * noise.sigma(a);
+      return std::isfinite(t) && t > a - 6 * noise.rangeSigma(a);
     };
     const Eigen::Isometry3d T_SW = measured.T_WS.inverse();
-    const double epsilon = eval::locusConfig(map, sensor).epsilon_rad;
+    const double epsilon = map.epsilon_rad;
     int region = 0, region_far = 0;
     for (int r = 0; r < grid.rows; ++r)
       for (int c = 0; c < grid.cols; ++c) {
-        if (b.locus.stateAt(r, c) != perception::CellState::Known) continue;
+        if (b.map.stateAt(r, c) != perception::CellState::Known) continue;
         const Eigen::Vector2d xy = grid.center(r, c);
-        const double z = b.locus.elevation()(r, c);
+        const double z = b.map.elevation()(r, c);
         const Eigen::Vector3d p = T_SW * Eigen::Vector3d(xy.x(), xy.y(), z);
         const Eigen::Vector2d px = pixelOf(measured, p);
         const int r0 = int(std::floor(px.x())), c0 = int(std::floor(px.y()));
@@ -159,7 +159,7 @@ TEST(UnwrapSideways, FoldedNearFieldIsUnwrappedAndMappedRight) {
         // dφ/dz on the vertical line through the point, in the sensor frame: b = R^T·z.
         const Eigen::Vector3d v = T_SW.linear() * Eigen::Vector3d::UnitZ();
         const double dphi_dz = (p.y() * v.z() - p.z() * v.y()) / (p.y() * p.y() + p.z() * p.z());
-        const double bound = 5 * b.locus.sigma()(r, c) + epsilon / std::abs(dphi_dz);
+        const double bound = 5 * b.map.sigma()(r, c) + epsilon / std::abs(dphi_dz);
         EXPECT_LE(std::abs(z - z_true(r, c)), bound) << "cell at x " << xy.x() << " y " << xy.y();
       }
     // Cells that need the unwrapping are known, and mapped beyond the interval.

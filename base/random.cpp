@@ -1,8 +1,8 @@
-#include "terrains/random.hpp"
+#include "base/random.hpp"
 
 #include <array>
 
-namespace ambler::terrains {
+namespace ambler::base {
 
 namespace {
 
@@ -68,4 +68,4 @@ double normalFromKey(std::uint64_t key) {
   }
 }
 
-}  // namespace ambler::terrains
+}  // namespace ambler::base

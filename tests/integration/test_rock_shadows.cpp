@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "eval/map_metrics.hpp"
-#include "eval/mapping.hpp"
+#include "perception/scan_to_map.hpp"
 #include "eval/runner.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
@@ -47,11 +47,11 @@ struct RockScore {
 
 // The jump in inverse range at the rock's occluding edge, in units of the detector's noise σ_u:
 // seen from height h, an obstacle of height H multiplies the range ρ of its rim by h/(h − H), so
-// Δu = H/(h·ρ), and σ_u = σ(ρ)/ρ² (RangeNoise::sigma).
+// Δu = H/(h·ρ), and σ_u = σ_ρ/ρ² (SensorModel::rangeSigma).
 double jumpInNoiseUnits(double height, double y) {
   const double rho = std::hypot(y, kMast - height);  // to the rim
-  const perception::RangeNoise noise;
-  return height / (kMast * rho) / (noise.sigma(rho) / (rho * rho));
+  const perception::SensorModel erim;
+  return height / (kMast * rho) / (erim.rangeSigma(rho) / (rho * rho));
 }
 
 // Without mixed pixels, a rock whose occlusion jumps by at least 2·h0 = 12 noise units (about eight
@@ -66,23 +66,23 @@ TEST(RockShadows, DetectorSensitivityAgainstGroundTruth) {
   map.cell_m = 0.05;
   map.x_m = {-3.5, 3.5};
   map.y_m = {2.5, 11.5};
-  map.baseline = "none";
-  const auto grid = mapGrid(map);
-  const sim::ElevationRaster z = truth.elevation(grid);
+  map.baseline = Baseline::None;
+  const auto grid = map.grid();
+  const perception::ElevationMap truth_map = truth.elevation(grid);
+  const perception::Raster<float>& z = truth_map.elevation();
   ViewSpec view;
   view.xyz_m = {0, 0, kMast};
   view.rpy_rad = {0, -30 * kDeg, 0};
   const Eigen::Isometry3d pose = perception::sensorPose(view.xyz_m, view.rpy_rad);
 
   for (const bool mixed : {false, true}) {
-    SensorSpec sensor;  // the ERIM defaults
+    perception::SensorModel sensor;  // the ERIM defaults
     sensor.mixed_pixels = mixed;
-    const sim::ErimConfig cfg = erimConfig(sensor);
-    const sim::VisibilityRaster vis = truth.visibility(grid, z, pose, cfg);
+    const perception::Raster<std::uint8_t> vis = truth.visibility(truth_map, pose, sensor);
     std::vector<std::vector<RockScore>> score(kRockX.size(), std::vector<RockScore>(kRockY.size()));
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-      const sim::Scan scan = sim::ErimScanner(*w.scene, cfg).scan(pose, seed);
-      const MapBuild b = buildLocusMap(scan.image, map, sensor);
+      const sim::Scan scan = sim::ErimScanner(*w.scene, sensor).scan(pose, seed);
+      const perception::ScanMap b = perception::scanToMap(scan.image, sensor, pose, grid, map.scanToMapConfig());
       for (int r = 0; r < grid.rows; ++r)
         for (int c = 0; c < grid.cols; ++c) {
           if (vis(r, c) != std::uint8_t(sim::Visibility::Hidden)) continue;
@@ -93,10 +93,10 @@ TEST(RockShadows, DetectorSensitivityAgainstGroundTruth) {
               if (std::abs(p.x() - kRockX[i]) > 0.5 || p.y() < kRockY[j] || p.y() > kRockY[j] + 1.5) continue;
               RockScore& s = score[i][j];
               ++s.hidden;
-              const auto state = b.locus.stateAt(r, c);
+              const auto state = b.map.stateAt(r, c);
               s.shadow += state == perception::CellState::Shadow;
               s.bad += state == perception::CellState::Known &&
-                       std::abs(b.locus.elevation()(r, c) - z(r, c)) > 3 * b.locus.sigma()(r, c);
+                       std::abs(b.map.elevation()(r, c) - z(r, c)) > 3 * b.map.sigma()(r, c);
             }
         }
     }

@@ -1,0 +1,28 @@
+#pragma once
+// The stages of a run, in order (docs/architecture.md, "Adding a stage"). Each is a small unit in
+// eval/stages/ that calls the library for its work, scores it against ground truth and writes its
+// files; the runner only calls them in turn.
+#include <vector>
+
+#include "eval/run_state.hpp"
+
+namespace ambler::eval {
+
+struct Stage {
+  const char* name;
+  bool (*wanted)(const Scenario&);  // whether the scenario asks for this stage
+  void (*run)(RunState&);
+};
+
+// The registered stages, in the order a run calls them.
+const std::vector<Stage>& runStages();
+
+// The stages (eval/stages/<name>.cpp).
+namespace stages {
+Stage world();      // the MuJoCo world, its ray scene and ground truth; terrain.png
+Stage scan();       // one ERIM scan per view; scans/
+Stage map();        // the locus map of each scan, scored; maps/
+Stage cartesian();  // the Cartesian baseline of each scan, scored; maps/
+}  // namespace stages
+
+}  // namespace ambler::eval

@@ -1,0 +1,29 @@
+#include "perception/scan_to_map.hpp"
+
+#include <stdexcept>
+
+namespace ambler::perception {
+
+ScanMap scanToMap(const RangeImage& measured, const SensorModel& sensor, const Eigen::Isometry3d& T_WS,
+                  const MapGrid& grid, const ScanToMapConfig& config) {
+  validate(sensor);
+  if (grid.rows <= 0 || grid.cols <= 0 || !(grid.cell > 0))
+    throw std::invalid_argument("scanToMap: the grid is empty");
+  if (!grid.gravityAligned()) throw std::invalid_argument("scanToMap: the map frame is not gravity-aligned");
+  ScanMap out;
+  out.image = measured;
+  out.image.T_WS = T_WS;
+  if (sensor.ambiguity_m > 0) out.unwrapped = unwrapRanges(out.image, sensor);
+  if (config.shadows == ShadowMethod::Gnc) {
+    GncConfig gnc = config.gnc;
+    gnc.sensor = sensor;
+    out.edges = detectRangeEdges(out.image, gnc);
+  }
+  LocusConfig locus = config.locus;
+  locus.sensor = sensor;
+  const LocusMapper mapper(out.image, out.edges ? &*out.edges : nullptr, locus, grid.T_WM);
+  out.map = mapper.map(grid);
+  return out;
+}
+
+}  // namespace ambler::perception

@@ -1,0 +1,44 @@
+#pragma once
+// From one range image to an elevation map, as the rover would run it: unwrap the ranges the
+// ambiguity interval folded, find the occluding edges that bound range shadows (GNC), and map by
+// the locus algorithm on the asked grid (docs/architecture.md, "The map stage").
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <optional>
+
+#include "perception/elevation_map.hpp"
+#include "perception/locus_mapper.hpp"
+#include "perception/range_edges.hpp"
+#include "perception/range_image.hpp"
+#include "perception/sensor_model.hpp"
+
+namespace ambler::perception {
+
+// How range shadows are found.
+enum class ShadowMethod : std::uint8_t {
+  None,  // no edge detection: every crossing is taken as a surface
+  Gnc,   // occluding edges by graduated non-convexity (range_edges.hpp)
+};
+
+struct ScanToMapConfig {
+  ShadowMethod shadows = ShadowMethod::Gnc;
+  LocusConfig locus;  // its sensor field is replaced by scanToMap's sensor
+  GncConfig gnc;      // likewise
+};
+
+// One scan's map and what was made on the way.
+struct ScanMap {
+  RangeImage image;                              // the measured image after unwrapping, at the pose used
+  long unwrapped = 0;                            // pixels moved by a multiple of the interval
+  std::optional<Raster<std::uint8_t>> edges;     // the edge mask (ShadowMethod::Gnc)
+  ElevationMap map;                              // on the asked grid, in its frame
+};
+
+// The map of `measured`, taken by `sensor` from pose T_WS (the pose the rover believes; it
+// replaces the image's), on `grid` (any gravity-aligned frame). Deterministic: the same inputs
+// give the same bits on any ISA and thread count. Throws std::invalid_argument for a sensor model
+// out of range or a grid that is empty or not gravity-aligned.
+ScanMap scanToMap(const RangeImage& measured, const SensorModel& sensor, const Eigen::Isometry3d& T_WS,
+                  const MapGrid& grid, const ScanToMapConfig& config = {});
+
+}  // namespace ambler::perception

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# Do the outputs change? Builds revision REV (default HEAD) in a temporary worktree, runs the demo,
+# ledge, plane and mars scenarios and one sweep (scenarios/sweeps/noise_check.yaml) with it and with
+# this tree's build/ambler, and compares every file byte for byte: metrics.json without its
+# timing_s block, rasters, pictures, scans, results.csv. Prints each file that differs (and, for
+# metrics.json, the differing values) and exits 1 if any does.
+#   bash scripts/same-outputs.sh [REV]        # this tree must be built (scripts/build.sh)
+# Needs git and jq (scripts/setup.sh installs both). The other revision's build is kept in
+# ${AMBLER_SAME_OUTPUTS_CACHE:-/tmp/ambler-same-outputs}/<commit> for the next comparison.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$PWD
+rev=$(git rev-parse "${1:-HEAD}")
+cache=${AMBLER_SAME_OUTPUTS_CACHE:-/tmp/ambler-same-outputs}/$rev
+[ -x build/ambler ] || { echo "same-outputs: build/ambler missing: run scripts/build.sh first" >&2; exit 2; }
+command -v jq >/dev/null || { echo "same-outputs: jq missing: run scripts/setup.sh" >&2; exit 2; }
+
+if [ ! -x "$cache/build/ambler" ]; then
+  echo "same-outputs: building $rev in $cache/src" >&2
+  rm -rf "$cache"; mkdir -p "$cache"
+  git worktree add --detach -f "$cache/src" "$rev" >/dev/null
+  cmake -S "$cache/src" -B "$cache/build" -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
+  cmake --build "$cache/build" --target ambler --parallel "$(nproc)" >/dev/null
+  git worktree remove --force "$cache/src"
+fi
+
+# The same inputs for both: this tree's scenario files.
+run_all() {  # $1 = ambler binary, $2 = output directory
+  rm -rf "$2"; mkdir -p "$2"
+  for s in demo ledge plane mars; do
+    "$1" run "scenarios/$s.yaml" --out "$2/$s" --quiet
+  done
+  "$1" sweep scenarios/sweeps/noise_check.yaml --out "$2/sweep" --keep all --quiet
+}
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+echo "same-outputs: running $rev" >&2
+run_all "$cache/build/ambler" "$out/before"
+echo "same-outputs: running this tree" >&2
+run_all "$root/build/ambler" "$out/after"
+
+status=0
+while IFS= read -r f; do
+  a=$out/before/$f b=$out/after/$f
+  if [ ! -e "$b" ]; then echo "only before: $f"; status=1; continue; fi
+  case "$f" in
+    */metrics.json)
+      if ! cmp -s <(jq -S 'del(.timing_s)' "$a") <(jq -S 'del(.timing_s)' "$b"); then
+        echo "differs: $f"; status=1
+        diff <(jq -S 'del(.timing_s)' "$a" | jq -c 'paths(scalars) as $p | [($p|map(tostring)|join(".")), getpath($p)]') \
+             <(jq -S 'del(.timing_s)' "$b" | jq -c 'paths(scalars) as $p | [($p|map(tostring)|join(".")), getpath($p)]') |
+          head -40 || true
+      fi ;;
+    *) cmp -s "$a" "$b" || { echo "differs: $f"; status=1; } ;;
+  esac
+done < <(cd "$out/before" && find . -type f | sed 's|^\./||' | sort)
+while IFS= read -r f; do
+  [ -e "$out/before/$f" ] || { echo "only after: $f"; status=1; }
+done < <(cd "$out/after" && find . -type f | sed 's|^\./||' | sort)
+n=$(cd "$out/before" && find . -type f | wc -l)
+[ $status = 0 ] && echo "same-outputs: all $n files identical to $rev (metrics.json: timing_s aside)"
+exit $status
