@@ -512,7 +512,7 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   // The extension's range errs by σ_ext = σ_p·√(1/n + (t + k̄)²/S_kk) (σ_p at the near surface's
   // range); the near surface gets one σ_ext more, so that noise rarely puts a visible lip top into
   // the shadow (each σ_ext more costs shadow recall: docs/locus.md has the trade's figures).
-  const double sigma_ext = std::sqrt(legacyVar(1 / (sy / n)) *
+  const double sigma_ext = std::sqrt(config_.sensor.rangeVariance(1 / (sy / n)) *
                                      (1.0 / n + (t_near + k_mean) * (t_near + k_mean) / s_kk));
   if (!(inv_near > 0) || lineAt(n0 - t_near * d) < 1 / inv_near + sigma_ext) return true;
   // The far surface: last clean sample at f0, range a, the sample past it b.
@@ -548,7 +548,7 @@ bool LocusMapper::linkedMixedPixel(int r1, int r2, const Sample& s1, const Sampl
   const double inv = 2 / i1 - 1 / i2;  // the other surface's inverse range extrapolated to m
   if (!(inv > 0)) return false;
   const double departure = (i_m - 1 / inv) * (far_side ? 1.0 : -1.0);  // towards the first surface
-  return departure > 3 * std::sqrt(6 * legacyVar(i_m));
+  return departure > 3 * std::sqrt(6 * config_.sensor.rangeVariance(i_m));
 }
 
 bool LocusMapper::clearAbove(const Line& l, double s_top, int r1, const Sample& s1) const {
@@ -625,7 +625,7 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
     int rc = r1;
     Sample sc = s1;
     for (int k = 0; k < 4 && sc.valid; ++k) {
-      if (sc.delta < -3 * std::sqrt(legacyVar(sc.rho - sc.delta))) break;
+      if (sc.delta < -3 * config_.sensor.rangeSigma(sc.rho - sc.delta)) break;
       rc -= r2 - r1;
       sc = rc >= 0 && rc < rows_ ? atRow(line, rc) : Sample{};
       if (sc.valid && !(sc.delta < 0)) sc.valid = false;

@@ -196,7 +196,6 @@ class LocusMapper {
   void finish(const Line& l, const Eigen::Vector3d& u, const Eigen::Vector3d& v, int r1, int r2,
               const LocusSample& s1, const LocusSample& s2, double phi_lo, const LocusSample& lo,
               double phi_hi, const LocusSample& hi, LocusHit& hit) const;
-  double legacyVar(double rho) const { const double n = config_.sensor.noise_k * rho * rho; return n * n + quantization_var_; }  // LEGACY
   int cellIndex(int r0, int c0) const { return r0 * (cols_ - 1) + c0; }
 
   const RangeImage& image_;

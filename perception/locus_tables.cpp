@@ -156,7 +156,7 @@ LocusMapper::LocusMapper(const RangeImage& image, const Raster<std::uint8_t>* ed
   }
   inv_dtheta_ = 1.0 / dtheta_;
   inv_dphi_ = 1.0 / dphi_;
-  quantization_var_ = config.sensor.quantization_m * config.sensor.quantization_m / 12.0;  // LEGACY
+  quantization_var_ = config.sensor.quantizationVariance();
   last_row_ = rows_ - 1;
   last_col_ = cols_ - 1;
   column_of_ = AngleTable(true, 3.0, theta0_, inv_dtheta_);  // |θ| ≤ 71.6°
@@ -247,7 +247,7 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   // Σw² of the bilinear weights factorises: ((1−fr)² + fr²)·((1−fc)² + fc²).
   const double gr = 1 - fr, gc = 1 - fc;
   const double sum_w2 = (gr * gr + fr * fr) * (gc * gc + fc * fc);
-  const double var_pixel = legacyVar(rho);
+  const double var_pixel = config_.sensor.rangeVariance(rho);
   const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
   const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
                        roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data());

@@ -87,8 +87,11 @@ struct Penalty {
 // model's (SensorModel::rangeVariance) in single precision.
 struct NoiseU {
   float sq, k;
-  explicit NoiseU(const SensorModel& s) : sq(float(std::max(s.quantization_m, 1e-3) / std::sqrt(12.0))), k(float(s.noise_k)) {}  // LEGACY
-  float sigma(float u) const { return sq * u * u + k; }  // LEGACY
+  explicit NoiseU(const SensorModel& s) : sq(float(std::sqrt(s.quantizationVariance()))), k(float(s.noise_k)) {}
+  float sigma(float u) const {
+    const float q = sq * u * u;
+    return std::sqrt(k * k + q * q);
+  }
 };
 
 // B&Z's SOR step f ← f − ω·(∂E/∂f)/T on n pixels `fo` of one colour: the data term (f − u)²/σ_u²,
@@ -304,7 +307,7 @@ long unwrapRanges(RangeImage& image, const SensorModel& sensor) {
   };
   // The continuity tolerance on u around a prediction u_pred: kUnwrapSigmas·√6·σ_u.
   auto tolerance = [&](double u_pred) {
-    return kUnwrapSigmas * std::sqrt(6.0) * (std::max(sensor.quantization_m, 1e-3) / std::sqrt(12.0) + sensor.noise_k * (1.0 / u_pred) * (1.0 / u_pred)) * u_pred * u_pred  /* LEGACY */;
+    return kUnwrapSigmas * std::sqrt(6.0) * sensor.rangeSigma(1.0 / u_pred) * u_pred * u_pred;
   };
 
   // The seed, taken as unfolded: in the lowest row that has one, the longest run of at least three

@@ -6,7 +6,8 @@
 # metrics.json, the differing values) and exits 1 if any does.
 #   bash scripts/same-outputs.sh [REV]        # this tree must be built (scripts/build.sh)
 # Needs git and jq (scripts/setup.sh installs both). The other revision's build is kept in
-# ${AMBLER_SAME_OUTPUTS_CACHE:-/tmp/ambler-same-outputs}/<commit> for the next comparison.
+# ${AMBLER_SAME_OUTPUTS_CACHE:-/tmp/ambler-same-outputs}/<commit> for the next comparison. With
+# AMBLER_SAME_OUTPUTS_KEEP=DIR both output trees are left in DIR/before and DIR/after.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
@@ -32,8 +33,12 @@ run_all() {  # $1 = ambler binary, $2 = output directory
   done
   "$1" sweep scenarios/sweeps/noise_check.yaml --out "$2/sweep" --keep all --quiet
 }
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+if [ -n "${AMBLER_SAME_OUTPUTS_KEEP:-}" ]; then
+  out=$AMBLER_SAME_OUTPUTS_KEEP; mkdir -p "$out"
+else
+  out=$(mktemp -d)
+  trap 'rm -rf "$out"' EXIT
+fi
 echo "same-outputs: running $rev" >&2
 run_all "$cache/build/ambler" "$out/before"
 echo "same-outputs: running this tree" >&2
