@@ -1,6 +1,6 @@
 #pragma once
 // Figures of merit of an elevation map against ground truth (the "map" and "map_cartesian" keys of
-// SCENARIO.md's metrics.json). A figure whose population is empty is NaN, written as JSON null.
+// metrics.json, docs/scenario.md). A figure whose population is empty is NaN, written as JSON null.
 #include <Eigen/Core>
 #include <array>
 #include <limits>

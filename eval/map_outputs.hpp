@@ -1,5 +1,5 @@
 #pragma once
-// The map files of a run directory (SCENARIO.md, DIR/maps/): the layers as rasters a GIS or a
+// The map files of a run directory (docs/scenario.md, "The run directory"): the layers as rasters a GIS or a
 // script reads back bit for bit, and pictures of them for people.
 #include <filesystem>
 #include <string>

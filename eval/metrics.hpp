@@ -1,5 +1,5 @@
 #pragma once
-// Figures of merit of each stage against ground truth (the keys of SCENARIO.md's metrics.json).
+// Figures of merit of each stage against ground truth (docs/scenario.md, "metrics.json").
 #include <nlohmann/json.hpp>
 
 #include "sim/erim_scanner.hpp"

@@ -655,8 +655,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
   const LaneIsa isa = config_.vectorized ? laneIsa() : LaneIsa::None;
   // Tasks of whole map rows, about 256 cells each: rows cost very different amounts (unseen rows
   // are cheap), small tasks keep both cores busy to the end, and tasks much smaller than that
-  // cost more to hand out than they take (10 cm cells: 2-core speedup 1.73-1.91 with one row per
-  // task, 1.93-1.97 with two). Rows are independent (each starts without a hint), so the map is
+  // cost more to hand out than they take (docs/benchmarks.md has the measurements). Rows are independent (each starts without a hint), so the map is
   // the same however it is split. Within a row, cells go in groups of kLanes: every
   // cell of a group starts its scanline search from the same hint — the last bracket found in the
   // groups before it, or, in a group that starts without one, the first found in the group — so
