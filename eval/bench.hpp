@@ -10,12 +10,15 @@ struct BenchOptions {
   std::filesystem::path json;  // empty: no file
 };
 
-// The scanner benchmark (issue 2): emulator vs a single-thread mj_ray loop on a 64×256 scan,
-// and emulator vs a bare Embree packet cast on a 1024×4096 scan over all cores. Prints a table.
+// The scanner benchmark (docs/benchmarks.md): emulator vs a single-thread mj_ray loop on a 64×256
+// scan, and emulator vs a bare Embree packet cast of the same rays (sim::RayScene::referenceCast)
+// on a 1024×4096 scan over all cores. The ERIM's default sensor model. Prints a table.
 nlohmann::ordered_json benchScan(const BenchOptions& options);
 
-// The mapping benchmark (issue 3): nanoseconds per cell of the locus map at 2, 5, 10 and 20 cm on
-// one thread and on all cores, against the Cartesian baseline on the same scan. Prints a table.
+// The mapping benchmark (docs/benchmarks.md): nanoseconds per cell of the locus map at 2, 5, 10 and
+// 20 cm on one thread and on all cores, against the Cartesian baseline on the same scan. The scan
+// is the ERIM's default sensor model (the demo's), unwrapped and edge-detected by
+// perception::scanToMap as a run's map stage does; the maps are then timed alone. Prints a table.
 nlohmann::ordered_json benchMap(const BenchOptions& options);
 
 }  // namespace ambler::eval

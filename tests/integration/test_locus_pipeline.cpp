@@ -20,6 +20,7 @@
 #include "sim/ground_truth.hpp"
 #include "sim/ray_scene.hpp"
 #include "sim/world.hpp"
+#include "sim/fixtures.hpp"
 #include "terrains/terrain.hpp"
 
 namespace ambler::eval {
@@ -29,22 +30,8 @@ namespace fs = std::filesystem;
 constexpr double kDeg = std::numbers::pi / 180.0;
 
 // A generated terrain loaded into MuJoCo and Embree, in a temporary directory.
-struct Bench {
-  fs::path dir;
-  std::unique_ptr<sim::World> world;
-  std::unique_ptr<sim::RayScene> scene;
-  std::unique_ptr<sim::GroundTruth> truth;
-  explicit Bench(const terrains::TerrainSpec& spec, std::uint64_t seed) {
-    static int n = 0;
-    dir = fs::temp_directory_path() / ("ambler-pipe-" + std::to_string(::getpid()) + "-" + std::to_string(n++));
-    world = std::make_unique<sim::World>(sim::World::load(sim::writeWorld(terrains::makeTerrain(spec, seed), dir, "t")));
-    scene = std::make_unique<sim::RayScene>(*world);
-    truth = std::make_unique<sim::GroundTruth>(*scene);
-  }
-  ~Bench() {
-    std::error_code ec;
-    fs::remove_all(dir, ec);
-  }
+struct Bench : test::TerrainWorld {
+  Bench(const terrains::TerrainSpec& spec, std::uint64_t seed) : TerrainWorld(spec, seed) {}
   // Scan from `view`, map, and score against ground truth.
   MapMetrics run(const perception::SensorModel& sensor, const ViewSpec& view, const MapSpec& map, std::uint64_t seed,
                  perception::ScanMap* keep = nullptr, const perception::LocusConfig* config = nullptr) const {

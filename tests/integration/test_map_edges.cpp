@@ -22,43 +22,24 @@
 #include "sim/ray_scene.hpp"
 #include "sim/world.hpp"
 #include "terrains/terrain.hpp"
-#include "tests/test_support.hpp"
+#include "sim/fixtures.hpp"
 
 namespace ambler::eval {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-struct Scene {
-  test::TempDir tmp;
-  std::unique_ptr<sim::World> world;
-  std::unique_ptr<sim::RayScene> scene;
-  std::unique_ptr<sim::GroundTruth> truth;
-  void build() {
-    scene = std::make_unique<sim::RayScene>(*world);
-    truth = std::make_unique<sim::GroundTruth>(*scene);
-  }
-};
+using Scene = test::SimWorld;
 
-std::unique_ptr<Scene> mjcfScene(const std::string& xml) {
-  auto s = std::make_unique<Scene>();
-  const auto file = s->tmp.path() / "world.xml";
-  std::ofstream(file) << xml;
-  s->world = std::make_unique<sim::World>(sim::World::load(file));
-  s->build();
-  return s;
-}
+std::unique_ptr<Scene> mjcfScene(const std::string& xml) { return std::make_unique<test::MjcfWorld>(xml); }
 
 std::unique_ptr<Scene> dropScene(double drop_m) {
-  auto s = std::make_unique<Scene>();
   terrains::TerrainSpec t;
   t.kind = terrains::TerrainKind::Steps;
   t.size_m = {40, 40};
   t.cell_m = 0.05;
   t.steps = {{0.0, drop_m}};  // z = drop for x > 0: the high side
-  s->world = std::make_unique<sim::World>(sim::World::load(sim::writeWorld(terrains::makeTerrain(t, 1), s->tmp.path(), "t")));
-  s->build();
-  return s;
+  return std::make_unique<test::TerrainWorld>(t, 1);
 }
 
 // One view mapped and the ground truth on the same grid.
@@ -171,7 +152,6 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
 // footprint's far part went on returns a range past the rim, and a ceiling under it can be low
 // (docs/locus.md).
 TEST(MapEdges, ShadowCeilingsBehindRocksAreAboveTheSurface) {
-  auto s = std::make_unique<Scene>();
   terrains::TerrainSpec t;
   t.kind = terrains::TerrainKind::Mars;
   t.size_m = {30, 30};
@@ -180,8 +160,7 @@ TEST(MapEdges, ShadowCeilingsBehindRocksAreAboveTheSurface) {
   t.hurst = 0.8;
   t.rocks = terrains::RockSpec{0.15, 0.15, 1.2};
   t.craters = terrains::CraterSpec{10, 1.5, 8.0, 2.0};
-  s->world = std::make_unique<sim::World>(sim::World::load(sim::writeWorld(terrains::makeTerrain(t, 11), s->tmp.path(), "t")));
-  s->build();
+  const auto s = std::make_unique<test::TerrainWorld>(t, 11);
   perception::SensorModel sensor;
   sensor.mixed_pixels = false;
   long shadow_with_ceiling = 0;

@@ -61,7 +61,7 @@ double jumpInNoiseUnits(double height, double y) {
 // docs/range_edges.md ("Small rocks"), not a guarantee of the detector.
 TEST(RockShadows, DetectorSensitivityAgainstGroundTruth) {
   const test::MjcfWorld w(rockField());
-  const sim::GroundTruth truth(*w.scene);
+  const sim::GroundTruth& truth = *w.truth;
   MapSpec map;
   map.cell_m = 0.05;
   map.x_m = {-3.5, 3.5};

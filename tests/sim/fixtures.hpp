@@ -1,5 +1,6 @@
 #pragma once
-// Shared test fixtures for sim/: temporary directories and worlds made from terrains or MJCF.
+// Shared test fixtures for sim/ and the integration tests: worlds made from terrains or MJCF, with
+// their ray scene and ground truth, in temporary directories.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "sim/ground_truth.hpp"
 #include "sim/ray_scene.hpp"
 #include "sim/world.hpp"
 #include "terrains/terrain.hpp"
@@ -19,26 +21,35 @@
 
 namespace ambler::test {
 
-// A world written from `terrain` into a temporary directory and loaded back, with its ray scene.
-struct TerrainWorld {
+// A loaded world in a temporary directory, with its ray scene and ground truth.
+struct SimWorld {
   TempDir dir;
   std::unique_ptr<sim::World> world;
   std::unique_ptr<sim::RayScene> scene;
-  explicit TerrainWorld(const terrains::Terrain& terrain) {
-    world = std::make_unique<sim::World>(sim::World::load(sim::writeWorld(terrain, dir.path(), "test")));
+  std::unique_ptr<sim::GroundTruth> truth;
+
+ protected:
+  void load(sim::World w) {
+    world = std::make_unique<sim::World>(std::move(w));
     scene = std::make_unique<sim::RayScene>(*world);
+    truth = std::make_unique<sim::GroundTruth>(*scene);
   }
 };
 
+// A world written from `terrain` into a temporary directory and loaded back.
+struct TerrainWorld : SimWorld {
+  explicit TerrainWorld(const terrains::Terrain& terrain) {
+    load(sim::World::load(sim::writeWorld(terrain, dir.path(), "test")));
+  }
+  // The terrain `spec` draws from `seed`.
+  TerrainWorld(const terrains::TerrainSpec& spec, std::uint64_t seed) : TerrainWorld(terrains::makeTerrain(spec, seed)) {}
+};
+
 // A world from inline MJCF text, with asset files (name → bytes) written beside it first.
-struct MjcfWorld {
-  TempDir dir;
-  std::unique_ptr<sim::World> world;
-  std::unique_ptr<sim::RayScene> scene;
+struct MjcfWorld : SimWorld {
   explicit MjcfWorld(const std::string& xml, const std::map<std::string, std::string>& files = {}) {
     for (const auto& [name, bytes] : files) std::ofstream(dir.path() / name, std::ios::binary) << bytes;
-    world = std::make_unique<sim::World>(sim::World::fromString(xml, dir.path()));
-    scene = std::make_unique<sim::RayScene>(*world);
+    load(sim::World::fromString(xml, dir.path()));
   }
 };
 
