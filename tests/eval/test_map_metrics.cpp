@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -10,10 +11,13 @@
 #include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
+#include "eval/figures.hpp"
 #include "eval/io.hpp"
 #include "eval/map_metrics.hpp"
 #include "eval/map_outputs.hpp"
+#include "picture_checks.hpp"
 
 namespace ambler::eval {
 namespace {
@@ -258,6 +262,58 @@ bool sameBits(const perception::Raster<float>& a, const perception::Raster<float
          std::memcmp(a.data(), b.data(), sizeof(float) * std::size_t(a.size())) == 0;
 }
 
+// The map pictures' colours (map_outputs.cpp): unseen cells in shadedRelief's no-data grey,
+// unknown ones lighter grey, known cells without truth a middle grey, known ones in the state view
+// green; range shadow hatched (test::hatch).
+const cv::Vec3b kUnseen(40, 40, 40), kUnknown(150, 150, 150), kNoTruth(95, 95, 95), kKnown(120, 190, 110);
+
+// The error pictures' diverging ramp: level i at t = i/127.5 − 1, white (247, 247, 247) blended
+// linearly towards Moreland's cool-warm blue (BGR 192, 76, 59) for t < 0 and red (38, 4, 180) for
+// t > 0, each channel rounded.
+cv::Mat divergingRamp() {
+  const cv::Vec3d blue(192, 76, 59), white(247, 247, 247), red(38, 4, 180);
+  cv::Mat ramp(1, 256, CV_8UC3);
+  for (int i = 0; i < 256; ++i) {
+    const double t = i / 127.5 - 1.0;
+    const cv::Vec3d c = t < 0 ? white + (-t) * (blue - white) : white + t * (red - white);
+    ramp.at<cv::Vec3b>(0, i) = cv::Vec3b(uchar(std::lround(c[0])), uchar(std::lround(c[1])), uchar(std::lround(c[2])));
+  }
+  return ramp;
+}
+
+// The cells of a map picture: k × k px each (the smallest integer enlargement to ≥ 600 px wide,
+// cut while the picture would be taller than 2400 px), the picture at (x0, 28) of the canvas.
+struct CellLayout {
+  int k, x0;
+  explicit CellLayout(const perception::MapGrid& g) {
+    k = std::max(1, (600 + g.cols - 1) / g.cols);
+    while (k > 1 && g.rows * k > 2400) --k;
+    x0 = (std::max(g.cols * k + 16, 360) - g.cols * k) / 2;
+  }
+  // Every pixel of cell (r, c) has the colour f(x, y) (x, y in the enlarged picture).
+  template <class F>
+  ::testing::AssertionResult cellIs(const cv::Mat& canvas, int r, int c, F f) const {
+    for (int y = k * r; y < k * (r + 1); ++y)
+      for (int x = k * c; x < k * (c + 1); ++x)
+        if (canvas.at<cv::Vec3b>(28 + y, x0 + x) != f(x, y))
+          return ::testing::AssertionFailure() << "cell " << r << "," << c << " pixel " << x << "," << y << ": "
+                                               << canvas.at<cv::Vec3b>(28 + y, x0 + x) << " not " << f(x, y);
+    return ::testing::AssertionSuccess();
+  }
+  ::testing::AssertionResult cellIs(const cv::Mat& canvas, int r, int c, const cv::Vec3b& colour) const {
+    return cellIs(canvas, r, c, [&](int, int) { return colour; });
+  }
+  ::testing::AssertionResult cellIsHatched(const cv::Mat& canvas, int r, int c) const {
+    return cellIs(canvas, r, c, [](int x, int y) { return test::hatch(x, y); });
+  }
+};
+
+cv::Mat readPicture(const fs::path& p) {
+  cv::Mat img = cv::imread(p.string(), cv::IMREAD_COLOR);
+  EXPECT_FALSE(img.empty()) << p;
+  return img;
+}
+
 TEST(MapFiles, RastersReadBackBitForBit) {
   const Case k;
   OutDir out;
@@ -316,6 +372,123 @@ TEST(MapFiles, RowZeroIsNorth) {
   EXPECT_DOUBLE_EQ(meta["x_min_m"].get<double>() + 0.5 * cell_m, -0.75);
   EXPECT_DOUBLE_EQ(meta["y_max_m"].get<double>() - 0.5 * cell_m, 1.75);
   EXPECT_FALSE(fs::exists(out.dir / "nw_error.png"));  // no truth, no error picture
+  // The picture is north-up too: the known cell is the top-left block of the state view.
+  const cv::Mat view = readPicture(out.dir / "nw_state_view.png");
+  const CellLayout at(map.grid());
+  EXPECT_TRUE(at.cellIs(view, 0, 0, kKnown));
+  EXPECT_TRUE(at.cellIs(view, 3, 0, kUnseen));
+  EXPECT_TRUE(at.cellIs(view, 0, 4, kUnseen));
+}
+
+// Each picture of the hand-made case, cell by cell (the 4 × 5 grid is enlarged 120×: 600 × 480 px
+// at (8, 28) of a 616 px canvas), with its colour scale (framed pictures: 440 px from x = 88, 8 px
+// under the picture) and its legend swatches (4 px under the canvas, from x = 8).
+TEST(MapFiles, PicturesShowEachCell) {
+  const Case k;
+  OutDir out;
+  const perception::ElevationMap case_truth = truthMap(k.map.grid(), k.truth);
+  writeMapFiles(out.dir, "case", k.map, &case_truth, "hand-made case");
+  const CellLayout at(k.map.grid());
+  ASSERT_EQ(at.k, 120);
+  ASSERT_EQ(at.x0, 8);
+  const int framed_rows = 480 + 28 + 46, bar_y = 28 + 480 + 8, bar_w = 616 - 16 - 160;
+  auto isShadow = [&](int r, int c) { return k.map.stateAt(r, c) == CellState::Shadow; };
+
+  // Elevation: each cell the colour reliefImage gives it (unseen: dark grey), shadow hatched.
+  const cv::Mat elevation = readPicture(out.dir / "case_elevation.png");
+  ASSERT_EQ(elevation.size(), cv::Size(616, framed_rows + 26));
+  const cv::Mat relief = reliefImage(k.map.elevation(), 0.5).image;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 5; ++c) {
+      if (isShadow(r, c)) {
+        EXPECT_TRUE(at.cellIsHatched(elevation, r, c));
+      } else {
+        EXPECT_TRUE(at.cellIs(elevation, r, c, relief.at<cv::Vec3b>(r, c)));
+        if (k.map.stateAt(r, c) == CellState::Unseen) {
+          EXPECT_EQ(relief.at<cv::Vec3b>(r, c), kUnseen);
+        }
+      }
+    }
+  test::expectColourScale(elevation, colourRamp(cv::COLORMAP_VIRIDIS), 88, bar_y, bar_w);
+  {
+    const auto xs = test::legendSwatchX({"unseen", "range shadow"});
+    test::expectSwatch(elevation, xs[0], framed_rows + 4, kUnseen, false, "elevation: unseen");
+    test::expectSwatch(elevation, xs[1], framed_rows + 4, test::kShadow, true, "elevation: shadow");
+  }
+
+  // σ: inferno at 255·(σ − lo)/(hi − lo) rounded over the known cells' σ, lo = 0.0625, hi = 0.5:
+  // 0.5 → 255, 0.0625 → 0, 0.25 → 109.29, 0.2f → 80.14, 0.1f → 21.86.
+  const cv::Mat sigma = readPicture(out.dir / "case_sigma.png");
+  ASSERT_EQ(sigma.size(), cv::Size(616, framed_rows + 26));
+  const cv::Mat inferno = colourRamp(cv::COLORMAP_INFERNO);
+  const int sigma_level[2][5] = {{255, 255, 0, 22, 109}, {109, 80, 22, -1, -1}};
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 5; ++c) {
+      if (isShadow(r, c)) {
+        EXPECT_TRUE(at.cellIsHatched(sigma, r, c));
+      } else if (k.map.stateAt(r, c) == CellState::Known) {
+        EXPECT_TRUE(at.cellIs(sigma, r, c, inferno.at<cv::Vec3b>(0, sigma_level[r][c])));
+      } else {
+        EXPECT_TRUE(at.cellIs(sigma, r, c, kUnknown));
+      }
+    }
+  test::expectColourScale(sigma, inferno, 88, bar_y, bar_w);
+  {
+    const auto xs = test::legendSwatchX({"unknown", "range shadow"});
+    test::expectSwatch(sigma, xs[0], framed_rows + 4, kUnknown, false, "sigma: unknown");
+    test::expectSwatch(sigma, xs[1], framed_rows + 4, test::kShadow, true, "sigma: shadow");
+  }
+
+  // Error: the diverging ramp at 127.5 + 127.5·e/s rounded and clamped, s the 99th percentile of
+  // |e| (rank ⌊0.99·6⌋ = 5 of 0, 0.125, 0.25, 0.25, 0.5, 0.75, 1: s = 0.75). e = 0.5 → 212.5 → 213,
+  // −0.25 → 85, 0.125 → 148.75 → 149, 0 → 127.5 → 128, −1 → −42.5 → 0 (full blue), 0.75 → 255
+  // (full red), 0.25 → 170. (1, 2) is known without truth.
+  const cv::Mat error = readPicture(out.dir / "case_error.png");
+  ASSERT_EQ(error.size(), cv::Size(616, framed_rows + 26));
+  const cv::Mat diverging = divergingRamp();
+  const int error_level[2][5] = {{213, 85, 149, 128, 0}, {255, 170, -1, -1, -1}};
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 5; ++c) {
+      if (isShadow(r, c)) {
+        EXPECT_TRUE(at.cellIsHatched(error, r, c));
+      } else if (r == 1 && c == 2) {
+        EXPECT_TRUE(at.cellIs(error, r, c, kNoTruth));
+      } else if (k.map.stateAt(r, c) == CellState::Known) {
+        EXPECT_TRUE(at.cellIs(error, r, c, diverging.at<cv::Vec3b>(0, error_level[r][c])));
+      } else {
+        EXPECT_TRUE(at.cellIs(error, r, c, kUnknown));
+      }
+    }
+  EXPECT_EQ(diverging.at<cv::Vec3b>(0, 0), cv::Vec3b(192, 76, 59));  // (0, 4), 1 m below: blue
+  EXPECT_EQ(diverging.at<cv::Vec3b>(0, 255), cv::Vec3b(38, 4, 180));  // (1, 0), 0.75 m above: red
+  test::expectColourScale(error, diverging, 88, bar_y, bar_w);
+  {
+    const auto xs = test::legendSwatchX({"unknown", "range shadow", "known, no truth"});
+    test::expectSwatch(error, xs[0], framed_rows + 4, kUnknown, false, "error: unknown");
+    test::expectSwatch(error, xs[1], framed_rows + 4, test::kShadow, true, "error: shadow");
+    test::expectSwatch(error, xs[2], framed_rows + 4, kNoTruth, false, "error: no truth");
+  }
+
+  // State view: known green, unseen dark grey, shadow hatched; no colour scale (the picture sits
+  // on a canvas 4 px taller than it and its head); the legend gives each state's share of the
+  // 20 cells: 9 unseen, 8 known, 3 shadow.
+  const cv::Mat state = readPicture(out.dir / "case_state_view.png");
+  ASSERT_EQ(state.size(), cv::Size(616, 480 + 28 + 4 + 26));
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 5; ++c) {
+      const CellState s = k.map.stateAt(r, c);
+      if (s == CellState::Shadow) {
+        EXPECT_TRUE(at.cellIsHatched(state, r, c));
+      } else {
+        EXPECT_TRUE(at.cellIs(state, r, c, s == CellState::Known ? kKnown : kUnseen));
+      }
+    }
+  {
+    const auto xs = test::legendSwatchX({"unseen 45.0%", "known 40.0%", "range shadow 15.0%"});
+    test::expectSwatch(state, xs[0], 512 + 4, kUnseen, false, "state: unseen");
+    test::expectSwatch(state, xs[1], 512 + 4, kKnown, false, "state: known");
+    test::expectSwatch(state, xs[2], 512 + 4, test::kShadow, true, "state: shadow");
+  }
 }
 
 TEST(MapFiles, CartesianFilesAndGridMismatch) {
@@ -361,6 +534,47 @@ TEST(MapFiles, PicturesOfASyntheticMap) {
     ASSERT_FALSE(pic.empty()) << name;
     EXPECT_GE(pic.cols, 600) << name;
   }
+  // What the pictures show, cell by cell (110 × 100 cells at 6 px). The error scale ends at the
+  // 99th percentile s of |map − truth| over the known cells (rank ⌊0.99·(n − 1)⌋); each known cell
+  // is the diverging ramp at 127.5 + 127.5·e/s rounded and clamped.
+  const CellLayout at(grid);
+  ASSERT_EQ(at.k, 6);
+  std::vector<double> abs_err;
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c)
+      if (map.stateAt(r, c) == CellState::Known)
+        abs_err.push_back(std::abs(double(map.elevation()(r, c)) - double(truth(r, c))));
+  ASSERT_GT(abs_err.size(), 2000u);
+  std::sort(abs_err.begin(), abs_err.end());
+  const double scale = std::max(1e-3, abs_err[std::size_t(0.99 * double(abs_err.size() - 1))]);
+  const cv::Mat error = readPicture(out.dir / "synthetic_error.png");
+  const cv::Mat cartesian = readPicture(out.dir / "synthetic_cartesian_error.png");
+  const cv::Mat state = readPicture(out.dir / "synthetic_state_view.png");
+  const cv::Mat diverging = divergingRamp();
+  long red = 0, blue = 0;
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      const CellState s = map.stateAt(r, c);
+      if (s == CellState::Shadow) {
+        ASSERT_TRUE(at.cellIsHatched(error, r, c));
+        ASSERT_TRUE(at.cellIsHatched(state, r, c));
+        continue;
+      }
+      ASSERT_TRUE(at.cellIs(state, r, c, s == CellState::Known ? kKnown : kUnseen));
+      if (s != CellState::Known) {
+        ASSERT_TRUE(at.cellIs(error, r, c, kUnknown));
+        continue;
+      }
+      const double e = double(map.elevation()(r, c)) - double(truth(r, c));
+      const long level = std::clamp(std::lround(127.5 + 127.5 * e / scale), 0L, 255L);
+      ASSERT_TRUE(at.cellIs(error, r, c, diverging.at<cv::Vec3b>(0, int(level))));
+      red += level == 255, blue += level == 0;
+    }
+  // About 1 % of the cells lie beyond the scale's ends, at either end.
+  EXPECT_GT(red + blue, 0);
+  // The Cartesian error picture of the same map is the same picture below its title.
+  ASSERT_EQ(cartesian.size(), error.size());
+  EXPECT_EQ(cv::norm(cartesian.rowRange(28, cartesian.rows), error.rowRange(28, error.rows), cv::NORM_INF), 0.0);
 }
 
 }  // namespace

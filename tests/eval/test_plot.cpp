@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <limits>
+#include <opencv2/imgproc.hpp>
 
 #include "eval/io.hpp"
 #include "eval/plot.hpp"
@@ -63,6 +64,21 @@ TEST(LogTicks, Decades) {
   EXPECT_EQ(logTicks(1e-9, 1e9), (std::vector<double>{1e-9, 1e-6, 1e-3, 1, 1e3, 1e6, 1e9}));  // every 3rd
 }
 
+cv::Vec3b bgr(const cv::Scalar& s) { return cv::Vec3b(uchar(s[0]), uchar(s[1]), uchar(s[2])); }
+
+// Whether `img` has a horizontal run of at least `length` pixels of exactly `colour` (a legend
+// swatch's 26 px line of thickness 2 has one; markers, 7 px wide, do not).
+bool hasHorizontalRun(const cv::Mat& img, const cv::Vec3b& colour, int length) {
+  for (int r = 0; r < img.rows; ++r) {
+    int run = 0;
+    for (int c = 0; c < img.cols; ++c) {
+      run = img.at<cv::Vec3b>(r, c) == colour ? run + 1 : 0;
+      if (run >= length) return true;
+    }
+  }
+  return false;
+}
+
 PlotSpec sampleSpec(bool log) {
   PlotSpec spec{"map rms error vs sensor noise", "noise_k", "rms error (m)", log, log, {}};
   Series a{"locus", {}, {}, cv::Scalar(-1, -1, -1, -1), true};
@@ -85,12 +101,24 @@ TEST(RenderPlot, LinearAndLogAxesAtTheRequestedSize) {
   EXPECT_EQ(log.rows, 420);
   EXPECT_EQ(log.cols, 700);
   EXPECT_EQ(log.at<cv::Vec3b>(0, 0), cv::Vec3b(255, 255, 255));  // white background
+  // Both series are labelled: each has a legend swatch, a line in the palette's colour of its index.
+  for (const cv::Mat* img : {&lin, &log})
+    for (int k : {0, 1}) EXPECT_TRUE(hasHorizontalRun(*img, bgr(plotColour(k)), 20)) << "series " << k;
   keep(lin, "plot_linear.png");
   keep(log, "plot_log.png");
 }
 
 TEST(RenderPlot, EmptyAndDegenerateInputsStillRender) {
-  EXPECT_EQ(renderPlot(PlotSpec{}).size(), cv::Size(900, 560));
+  const cv::Mat empty = renderPlot(PlotSpec{});
+  EXPECT_EQ(empty.size(), cv::Size(900, 560));
+  // Nothing but the frame, grid and labels: black, greys and white, no colour anywhere.
+  long coloured = 0;
+  for (int r = 0; r < empty.rows; ++r)
+    for (int c = 0; c < empty.cols; ++c) {
+      const cv::Vec3b p = empty.at<cv::Vec3b>(r, c);
+      coloured += p[0] != p[1] || p[1] != p[2];
+    }
+  EXPECT_EQ(coloured, 0);
   PlotSpec one{"one point", "x", "y", false, true, {Series{"p", {3}, {3}, cv::Scalar(0, 0, 0), true}}};
   EXPECT_EQ(renderPlot(one, 400, 300).size(), cv::Size(400, 300));
   PlotSpec nan{"all NaN", "x", "y", true, false, {Series{"n", {kNaN, -1}, {1, 2}, cv::Scalar(0, 0, 0), true}}};
@@ -116,6 +144,62 @@ TEST(RenderPlot, NaNBreaksTheLine) {
     in_run = hit;
   }
   EXPECT_EQ(runs, 2);
+}
+
+// Markers where the axes put their data. With no title or axis labels the plot area spans rows
+// [16, height − 34) and ends 24 px from the right; its left edge is the frame's full-height black
+// column. The axes run from the first to the last tick (niceTicks, or logTicks on a log axis, with
+// max(2, area/130 px) intervals across and max(2, area/80 px) down): a value v is at pixel
+// p0 + (v − t0)/(tn − t0)·(p1 − p0) (log10 of each on a log axis), rounded. A filled marker of
+// radius 3 covers its centre pixel and the four next to it in exactly the series' colour. The
+// labelled series has a legend swatch in the top-right corner (no point falls there); the
+// unlabelled one none.
+TEST(RenderPlot, MarkersSitAtTheirDataPoints) {
+  const std::vector<double> ax{1.5, 2.5, 4.0, 6.5}, ay{0.2, 0.9, 0.5, 0.35};
+  const std::vector<double> bx{3.0, 6.0}, by{0.6, 0.1};
+  const cv::Vec3b green(0, 160, 0);
+  for (bool log_x : {false, true}) {
+    PlotSpec spec{"", "", "", log_x, false,
+                  {Series{"series a", ax, ay, cv::Scalar(-1, -1, -1, -1), true, true},
+                   Series{"", bx, by, cv::Scalar(green[0], green[1], green[2]), true, false}}};
+    const int width = 700, height = 420;
+    const cv::Mat img = renderPlot(spec, width, height);
+    keep(img, log_x ? "plot_markers_log.png" : "plot_markers.png");
+    const int top = 16, bottom_edge = height - 34 - 1, right_edge = width - 24 - 1;
+    int left = -1;
+    for (int c = 0; c < width / 2 && left < 0; ++c) {
+      int black = 0;
+      for (int r = top; r <= bottom_edge; ++r) black += img.at<cv::Vec3b>(r, c) == cv::Vec3b(0, 0, 0);
+      if (black == bottom_edge - top + 1) left = c;
+    }
+    ASSERT_GT(left, 0) << "no frame found";
+    for (int r = top; r <= bottom_edge; ++r) ASSERT_EQ(img.at<cv::Vec3b>(r, right_edge), cv::Vec3b(0, 0, 0));
+    const int area_w = right_edge - left + 1, area_h = bottom_edge - top + 1;
+    const auto xt = log_x ? logTicks(1.5, 6.5) : niceTicks(1.5, 6.5, std::max(2, area_w / 130));
+    const auto yt = niceTicks(0.1, 0.9, std::max(2, area_h / 80));
+    auto unit = [&](double v) { return log_x ? std::log10(v) : v; };
+    auto px = [&](double v) {
+      return int(std::lround(left + (unit(v) - unit(xt.front())) / (unit(xt.back()) - unit(xt.front())) * (area_w - 1)));
+    };
+    auto py = [&](double v) {
+      return int(std::lround(bottom_edge + (v - yt.front()) / (yt.back() - yt.front()) * (top - bottom_edge)));
+    };
+    auto expectMarker = [&](double x, double y, const cv::Vec3b& colour) {
+      const int c = px(x), r = py(y);
+      for (const auto& [dr, dc] : {std::pair{0, 0}, {1, 0}, {-1, 0}, {0, 1}, {0, -1}})
+        EXPECT_EQ(img.at<cv::Vec3b>(r + dr, c + dc), colour) << "marker (" << x << ", " << y << ") log_x " << log_x;
+    };
+    for (std::size_t i = 0; i < ax.size(); ++i) expectMarker(ax[i], ay[i], bgr(plotColour(0)));
+    for (std::size_t i = 0; i < bx.size(); ++i) expectMarker(bx[i], by[i], green);
+    // The legend: one row, in a box of text width + 48 px, 6 px inside the top-right corner; its
+    // swatch line from 6 to 32 px into the box, 14 px below the box's top.
+    int baseline = 0;
+    const int w = cv::getTextSize("series a", cv::FONT_HERSHEY_SIMPLEX, 0.45, 1, &baseline).width + 48;
+    const int box_x = right_edge + 1 - w - 6, swatch_y = top + 6 + 4 + 10;
+    for (int c = box_x + 9; c <= box_x + 29; ++c)
+      EXPECT_EQ(img.at<cv::Vec3b>(swatch_y, c), bgr(plotColour(0))) << "legend swatch at x " << c;
+    EXPECT_FALSE(hasHorizontalRun(img, green, 10));  // markers only, and no legend entry
+  }
 }
 
 }  // namespace

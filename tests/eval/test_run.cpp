@@ -3,14 +3,24 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <numbers>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "eval/figures.hpp"
 #include "eval/io.hpp"
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
+#include "perception/sensor_geometry.hpp"
+#include "picture_checks.hpp"
+#include "sim/ground_truth.hpp"
+#include "sim/ray_scene.hpp"
+#include "sim/world.hpp"
 #include "test_support.hpp"
 
 namespace ambler::eval {
@@ -69,6 +79,129 @@ TEST(Run, WritesEveryScanFileOfTheContract) {
   EXPECT_EQ(on_disk["name"], "run_test");
   EXPECT_EQ(on_disk["seed"], 11);
   EXPECT_TRUE(on_disk.contains("timing_s"));
+}
+
+cv::Mat readPicture(const fs::path& p) {
+  cv::Mat img = cv::imread(p.string(), cv::IMREAD_COLOR);
+  EXPECT_FALSE(img.empty()) << p;
+  return img;
+}
+
+// The largest difference of any channel of any pixel (the sizes must agree).
+double maxDifference(const cv::Mat& a, const cv::Mat& b) {
+  if (a.size() != b.size() || a.type() != b.type()) return 1e9;
+  return cv::norm(a, b, cv::NORM_INF);
+}
+
+// The pictures of the world and scan stages show what the run produced. terrain.png is the shaded
+// relief of the ground truth on the world stage's grid (the scene's bounds at the terrain's cell,
+// at most 1500 cells across), recomputed here from the world the run wrote: the same picture,
+// pixel for pixel. Each scan picture is rangePicture of the scan read back (range TIFF, the meta's
+// angles and pose); the pose comes back from degrees, which may move a shade's 8-bit truncation by
+// one, so within 1 per channel; no-return pixels are black.
+TEST(Run, WorldAndScanPicturesShowTheTruthAndTheScans) {
+  const Scenario sc = parseScenario(kScenario, "inline.yaml");
+  test::TempDir run;
+  runScenario(sc, {run.dir, false});
+  const sim::World world = sim::World::load(run.dir / "world" / "world.xml");
+  const sim::RayScene scene(world);
+  const sim::GroundTruth truth(scene);
+  const Eigen::AlignedBox3d b = scene.bounds();
+  const double extent = std::max(b.max().x() - b.min().x(), b.max().y() - b.min().y());
+  const auto grid = perception::MapGrid::covering(b.min().x(), b.max().x(), b.min().y(), b.max().y(),
+                                                  std::max(sc.terrain.cell_m, extent / 1500.0));
+  const cv::Mat terrain = readPicture(run.dir / "terrain.png");
+  const cv::Mat expected_terrain =
+      shadedRelief(truth.elevation(grid).elevation(), grid.cell, sc.name + ": terrain (ground truth)");
+  EXPECT_EQ(maxDifference(terrain, expected_terrain), 0.0);
+  const int pic_rows = terrain.rows - 28 - 46, pic_cols = int(std::lround(grid.cols * 4.0));
+  const auto f = test::FrameLayout::of(pic_rows, pic_cols);
+  ASSERT_EQ(terrain.cols, f.width);
+  test::expectColourScale(terrain, colourRamp(cv::COLORMAP_VIRIDIS), f.bar_x, f.bar_y, f.bar_w);
+
+  for (int k = 0; k < 2; ++k) {
+    const fs::path base = run.dir / "scans" / ("view_" + std::to_string(k));
+    const auto meta = nlohmann::json::parse(slurp(base.string() + "_meta.json"));
+    perception::RangeImage image;
+    image.range = readTiff(base.string() + "_range.tiff");
+    image.phi = meta["phi_rad"].get<std::vector<double>>();
+    image.theta = meta["theta_rad"].get<std::vector<double>>();
+    const auto xyz = meta["pose"]["xyz_m"].get<std::vector<double>>();
+    const auto rpy = meta["pose"]["rpy_deg"].get<std::vector<double>>();
+    const double deg = std::numbers::pi / 180.0;
+    image.T_WS = perception::sensorPose({xyz[0], xyz[1], xyz[2]}, {rpy[0] * deg, rpy[1] * deg, rpy[2] * deg});
+    const cv::Mat pic = readPicture(base.string() + ".png");
+    const cv::Mat expected = rangePicture(image, sc.sensor.max_range_m, sc.name + ": view_" + std::to_string(k) + " range");
+    EXPECT_LE(maxDifference(pic, expected), 1.0) << base;
+    // 32 × 128 pixels over 30° × 80°: 8× across (1024 / 128) and 8·(30/32)/(80/128) = 12× down.
+    const auto fr = test::FrameLayout::of(32 * 12, 128 * 8);
+    ASSERT_EQ(pic.size(), cv::Size(fr.width, fr.canvasRows(32 * 12)));
+    int none = 0;
+    for (int r = 0; r < 32; ++r)
+      for (int c = 0; c < 128; ++c)
+        if (!image.valid(r, c)) {
+          EXPECT_EQ(pic.at<cv::Vec3b>(fr.y0 + 12 * r + 6, fr.x0 + 8 * c + 4), cv::Vec3b(0, 0, 0)) << r << "," << c;
+          ++none;
+        }
+    test::expectColourScale(pic, colourRamp(cv::COLORMAP_TURBO), fr.bar_x, fr.bar_y, fr.bar_w);
+    RecordProperty("no_return_pixels_view_" + std::to_string(k), none);
+  }
+}
+
+// With a map region the map and Cartesian stages run too: every map file of the contract per view,
+// both scored in metrics.json, and pictures that show the maps on disk — the state view's cells in
+// the colour of state.png's state, the elevation picture's cells in reliefImage's colour of the
+// elevation TIFF (shadow hatched).
+TEST(Run, MapStagesWriteEveryMapFileAndPicturesOfThem) {
+  Scenario sc = parseScenario(std::string(kScenario) + "map:\n  cell_m: 0.1\n  region: {x_m: [-2, 2], y_m: [-1, 3]}\n",
+                              "inline.yaml");
+  ASSERT_TRUE(sc.map.has_value());
+  ASSERT_EQ(sc.map->baseline, Baseline::Cartesian);
+  test::TempDir run;
+  const auto metrics = runScenario(sc, {run.dir, false});
+  ASSERT_EQ(metrics["map"].size(), 2u);
+  ASSERT_EQ(metrics["map_cartesian"].size(), 2u);
+  const cv::Vec3b kKnown(120, 190, 110), kUnseen(40, 40, 40);
+  for (int k = 0; k < 2; ++k) {
+    const std::string stem = (run.dir / "maps" / ("view_" + std::to_string(k))).string();
+    for (const char* suffix : {"_elevation.tiff", "_sigma.tiff", "_shadow_ceiling.tiff", "_state.png", "_meta.json",
+                               "_elevation.png", "_sigma.png", "_state_view.png", "_error.png",
+                               "_cartesian_elevation.tiff", "_cartesian_error.png"})
+      EXPECT_TRUE(fs::exists(stem + suffix)) << stem + suffix;
+    EXPECT_GT(metrics["map"][k]["coverage"].get<double>(), 0.0);
+    const std::string fill = metrics["map_cartesian"][k]["gap_fill"].get<std::string>();
+    EXPECT_TRUE(fill == "nearest" || fill == "linear") << fill;
+
+    const auto meta = nlohmann::json::parse(slurp(stem + "_meta.json"));
+    const int rows = meta["rows"], cols = meta["cols"];
+    ASSERT_EQ(rows, 40);
+    ASSERT_EQ(cols, 40);
+    const cv::Mat state = cv::imread(stem + "_state.png", cv::IMREAD_UNCHANGED);
+    const perception::Raster<float> z = readTiff(stem + "_elevation.tiff");
+    const cv::Mat relief = reliefImage(z, meta["cell_m"].get<double>()).image;
+    // 40 cells → 15 px each (600 / 40), 600 px at (8, 28).
+    const cv::Mat view = readPicture(stem + "_state_view.png");
+    const cv::Mat elevation = readPicture(stem + "_elevation.png");
+    long known = 0, shadow = 0;
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c) {
+        const int x = 15 * c + 7, y = 15 * r + 7;  // the cell's centre in the enlarged picture
+        const auto s = perception::CellState(state.at<std::uint8_t>(r, c));
+        const cv::Vec3b shown = view.at<cv::Vec3b>(28 + y, 8 + x), relief_shown = elevation.at<cv::Vec3b>(28 + y, 8 + x);
+        if (s == perception::CellState::Shadow) {
+          EXPECT_EQ(shown, test::hatch(x, y)) << r << "," << c;
+          EXPECT_EQ(relief_shown, test::hatch(x, y)) << r << "," << c;
+          ++shadow;
+          continue;
+        }
+        EXPECT_EQ(shown, s == perception::CellState::Known ? kKnown : kUnseen) << r << "," << c;
+        EXPECT_EQ(relief_shown, relief.at<cv::Vec3b>(r, c)) << r << "," << c;
+        EXPECT_EQ(std::isfinite(z(r, c)), s == perception::CellState::Known) << r << "," << c;
+        known += s == perception::CellState::Known;
+      }
+    EXPECT_GT(known, 100);
+    RecordProperty("shadow_cells_view_" + std::to_string(k), int(shadow));
+  }
 }
 
 // Same scenario, same seed: every file byte-identical (metrics.json after dropping timing_s, the

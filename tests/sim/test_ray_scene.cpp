@@ -69,6 +69,34 @@ TEST(GroundTruth, WatertightOnGridAlignedRays) {
   EXPECT_GT(visible, 3000);
 }
 
+// Ground truth on a grid in a map frame turned by a yaw and offset in x, y and z: each cell holds
+// the plane's height at the cell centre's world point minus the frame origin's z (heights are
+// along M's z, which is the world's), Known with σ_z = 0; to 1e-5 m as above (float32 heights).
+// A frame ignored in x, y or z would be off by ≥ |a·Δx + b·Δy| or |oz|, far more than that.
+TEST(GroundTruth, ElevationOnAYawedOffsetGridIsInTheGridsFrame) {
+  const double a = 0.12, b = std::tan(15 * kDeg), z0 = 0.2;
+  const TerrainWorld w(test::planeTerrain(a, b, z0, 10.0, 0.1));
+  const GroundTruth truth(*w.scene);
+  const Eigen::Vector3d origin(1.3, -0.7, 0.45);
+  const auto T_WM = perception::mapFrame(origin, 35 * kDeg);
+  // Cell centres within √(4² + 5²) + |origin| < 8 m of the world origin: inside the 10 m plane.
+  const auto grid = perception::MapGrid::covering(-4, 4, -3, 5, 0.1, T_WM);
+  const perception::ElevationMap m = truth.elevation(grid);
+  ASSERT_TRUE(m.grid().sameAs(grid));
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      const Eigen::Vector3d p = grid.worldPoint(r, c, 0.0);
+      ASSERT_LT(std::max(std::abs(p.x()), std::abs(p.y())), 9.0);
+      ASSERT_EQ(m.stateAt(r, c), perception::CellState::Known) << r << "," << c;
+      EXPECT_NEAR(m.elevation()(r, c), a * p.x() + b * p.y() + z0 - origin.z(), 1e-5) << r << "," << c;
+      EXPECT_EQ(m.sigma()(r, c), 0.0f);
+    }
+  // Not gravity-aligned: refused.
+  Eigen::Isometry3d tilted = T_WM;
+  tilted.linear() = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  EXPECT_THROW(truth.elevation(perception::MapGrid::covering(-1, 1, -1, 1, 0.1, tilted)), std::invalid_argument);
+}
+
 // Every ray of a 64×256 ERIM scan of a fractal terrain with rocks: Embree and mj_ray agree on
 // hit or miss, on the geom, and on the distance to 1e-5 m.
 TEST(RayScene, AgreesWithMjRayOnEveryRayOfAFractalScanWithRocks) {
