@@ -33,14 +33,16 @@ const Ziggurat& ziggurat() {
   return z;
 }
 
-// The tail beyond R (Marsaglia 1964).
-double tail(std::uint64_t& key, bool negative) {
+// The tail beyond R (Marsaglia 1964), from a stream of its own: normalFromKey has already used
+// mix64(key) for the layer and the sign, so the tail's uniforms start from key with other bits.
+double tail(std::uint64_t key, bool negative) {
+  std::uint64_t s = key ^ 0xE7037ED1A0B428DBull;
   double x, y;
   do {
-    key = mix64(key);
-    x = std::log(1.0 - toUnit(key)) / kR;
-    key = mix64(key);
-    y = std::log(1.0 - toUnit(key));
+    s = mix64(s);
+    x = std::log(1.0 - toUnit(s)) / kR;
+    s = mix64(s);
+    y = std::log(1.0 - toUnit(s));
   } while (-2.0 * y < x * x);
   return negative ? x - kR : kR - x;
 }

@@ -586,7 +586,9 @@ TEST(UnwrapRanges, SidewaysPlaneFoldedInTheBottomRows) {
           }
         // Hundreds of folded pixels to decide, where the noise leaves any (at k = 1e-3 the bound
         // above is below A's range already: σ_ρ(20 m) = 0.4 m).
-        if (k <= 3e-4) EXPECT_GT(decidable_folded, 300);
+        if (k <= 3e-4) {
+          EXPECT_GT(decidable_folded, 300);
+        }
         EXPECT_EQ(decidable_nan, 0);
         RecordProperty("nan_tilt" + std::to_string(int(tilt)) + "_k" + std::to_string(k) + "_s" +
                            std::to_string(seed),
