@@ -146,9 +146,12 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
 }
 
 // Behind rocks the shadow ceiling is honest too: on Mars-like terrain (k = 0.15 rocks, craters;
-// the scenario mars.yaml) scanned with the ERIM's noise and quantisation, every shadow cell's
+// the scenario mars.yaml) scanned with the ERIM's noise and quantisation, a shadow cell's
 // ceiling is above the true surface (the ceiling is taken under a ray that went past the line
-// by more than 3σ_p). Mixed pixels are off: one whose central ray hit a rock's rim while its
+// by more than 3σ_p). That ray's own noise puts it more than 3σ_p too far with probability
+// Φ(−3) = 1.35e-3, and then its ceiling may be low: of the n ceilings of a view, the number below
+// the surface is at most Poisson(n·Φ(−3)), so the test allows the k whose upper tail
+// P(X > k) is below 1e-4. Mixed pixels are off: one whose central ray hit a rock's rim while its
 // footprint's far part went on returns a range past the rim, and a ceiling under it can be low
 // (docs/locus.md).
 TEST(MapEdges, ShadowCeilingsBehindRocksAreAboveTheSurface) {
@@ -174,14 +177,18 @@ TEST(MapEdges, ShadowCeilingsBehindRocksAreAboveTheSurface) {
     const Mapped m = mapView(*s, sensor, view, map, 21);
     const auto& state = m.build.map.state();
     const auto& ceiling = m.build.map.shadowCeiling();
-    long below = 0;
+    long below = 0, ceilings = 0;
     for (int r = 0; r < m.grid.rows; ++r)
       for (int c = 0; c < m.grid.cols; ++c)
         if (state(r, c) == std::uint8_t(perception::CellState::Shadow) && std::isfinite(ceiling(r, c))) {
-          ++shadow_with_ceiling;
+          ++ceilings;
           if (m.z(r, c) > ceiling(r, c)) ++below;
         }
-    EXPECT_EQ(below, 0) << "view from x = " << x;
+    shadow_with_ceiling += ceilings;
+    const double lambda = ceilings * 0.5 * std::erfc(3 / std::sqrt(2.0));
+    long allowed = 0;  // the smallest k with P(X > k) < 1e-4, X ~ Poisson(lambda)
+    for (double term = std::exp(-lambda), cdf = term; 1 - cdf >= 1e-4; cdf += term) term *= lambda / ++allowed;
+    EXPECT_LE(below, allowed) << "view from x = " << x << ": " << ceilings << " ceilings";
   }
   EXPECT_GT(shadow_with_ceiling, 300);
 }
