@@ -1,6 +1,8 @@
 // The generalized locus algorithm against closed forms on synthetic range images.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -74,6 +76,28 @@ INSTANTIATE_TEST_SUITE_P(Tilts, LocusPlane,
 // Any resolution: the 2 cm and 10 cm maps agree at the cell centres they share (each 10 cm centre
 // is a 2 cm centre). The same line gives the same answer up to the search's stopping rule:
 // |Δφ| < ε moves the point along the line by at most ε·ρ/sin(line, beam) ≈ 1e-5·12/0.5 m.
+// The constructor refuses what its tables cannot describe: an image smaller than one 2×2 cell,
+// scan angles that are not evenly spaced (φ falling, θ rising), an edge mask of another size, and
+// a map frame that is not gravity-aligned.
+TEST(LocusMapper, RefusesImagesItsTablesCannotDescribe) {
+  const Plane plane{0.0, 0.0, 0.0};
+  const auto img = planeImage(plane, sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}));
+  EXPECT_NO_THROW(LocusMapper(img, nullptr));
+  auto uneven = img;
+  uneven.phi[10] += 0.1 * (img.phi[0] - img.phi[1]);
+  EXPECT_THROW(LocusMapper(uneven, nullptr), std::invalid_argument);
+  auto reversed = img;
+  std::reverse(reversed.theta.begin(), reversed.theta.end());
+  EXPECT_THROW(LocusMapper(reversed, nullptr), std::invalid_argument);
+  const Raster<std::uint8_t> small = Raster<std::uint8_t>::Zero(img.rows() - 1, img.cols());
+  EXPECT_THROW(LocusMapper(img, &small), std::invalid_argument);
+  const auto tiny = RangeImage::blank(1, 8, 0.5, 0.5);
+  EXPECT_THROW(LocusMapper(tiny, nullptr), std::invalid_argument);
+  Eigen::Isometry3d tilted = Eigen::Isometry3d::Identity();
+  tilted.linear() = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  EXPECT_THROW(LocusMapper(img, nullptr, LocusConfig{}, tilted), std::invalid_argument);
+}
+
 TEST(LocusMapper, ResolutionIndependent) {
   const Plane plane{0.1, 0.2, 0.0};
   const auto img = planeImage(plane, sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}));
