@@ -95,7 +95,7 @@ void emitBlock(const YAML::Node& node, int indent, std::string& out) {
   const std::string pad(std::size_t(indent), ' ');
   for (auto it = node.begin(); it != node.end(); ++it) {
     if (node.IsMap()) {
-      const YAML::Node& key = it->first;
+      const YAML::Node key = it->first;  // by value: it->first lives only until the ';'
       out += pad + (key.IsScalar() && plainSafe(key.Scalar()) ? key.Scalar() : yamlQuoted(flowText(key))) +
              ":";
       emitValue(it->second, indent, out);
@@ -264,7 +264,7 @@ class SweepReader {
         if (longer.starts_with(shorter + "."))
           fail(where, "overlaps axis " + other.key + "; give each key once");
       }
-      const YAML::Node& values = it->second;
+      const YAML::Node values = it->second;  // by value: it->second lives only until the ';'
       if (!values.IsSequence() || values.size() == 0) {
         fail(where,
              "expected a non-empty list of values, got " + (values.IsNull() ? "nothing" : flowText(values)));
