@@ -1,5 +1,5 @@
-// `ambler run` end to end: every scan file of SCENARIO.md, consistent with itself, and the same
-// scenario and seed give byte-identical files.
+// `ambler run` end to end: every file of the run directory (docs/scenario.md), consistent with
+// itself, and the same scenario and seed give byte-identical files.
 #include <gtest/gtest.h>
 #include <unistd.h>
 

@@ -211,7 +211,7 @@ TEST(ScenarioExamples, LedgeEdgeCastsAShadowInsideTheMap) {
   const Eigen::Vector3d p = s.views[0].xyz_m;
   const Eigen::Vector3d rpy = s.views[0].rpy_rad;
   ASSERT_GT(p.x(), edge_x);  // on the top, looking back over the edge
-  // R = Rz(yaw)·Ry(roll)·Rx(pitch), SCENARIO.md.
+  // R = Rz(yaw)·Ry(roll)·Rx(pitch), docs/scenario.md ("views").
   const Eigen::Matrix3d r = (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
                              Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitY()) *
                              Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitX()))

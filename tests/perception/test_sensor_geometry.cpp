@@ -1,4 +1,4 @@
-// Eq. 1 of the paper, its inverse, the pixel angles and the sensor-pose convention of SCENARIO.md.
+// Eq. 1 of the paper, its inverse, the pixel angles and the sensor-pose convention (docs/conventions.md).
 #include <gtest/gtest.h>
 
 #include <cmath>
