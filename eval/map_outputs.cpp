@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <stdexcept>
 #include <vector>
 
@@ -222,6 +223,10 @@ void writeMapFiles(const std::filesystem::path& dir, const std::string& stem, co
   meta["cell_m"] = g.cell;
   meta["rows"] = g.rows;
   meta["cols"] = g.cols;
+  // The map frame M (docs/conventions.md): T_WM's origin in the world and its yaw about z.
+  const Eigen::Vector3d o = g.T_WM.translation();
+  meta["frame"]["origin_m"] = {o.x(), o.y(), o.z()};
+  meta["frame"]["yaw_deg"] = std::atan2(g.T_WM.linear()(1, 0), g.T_WM.linear()(0, 0)) * 180.0 / std::numbers::pi;
   writeJson(dir / (stem + "_meta.json"), meta);
 
   writePng(dir / (stem + "_elevation.png"), elevationPicture(map, title));

@@ -339,7 +339,9 @@ TEST(MapFiles, RastersReadBackBitForBit) {
   const auto meta = nlohmann::ordered_json::parse(in);
   std::vector<std::string> keys;
   for (const auto& item : meta.items()) keys.push_back(item.key());
-  EXPECT_EQ(keys, (std::vector<std::string>{"x_min_m", "y_max_m", "cell_m", "rows", "cols"}));
+  EXPECT_EQ(keys, (std::vector<std::string>{"x_min_m", "y_max_m", "cell_m", "rows", "cols", "frame"}));
+  EXPECT_EQ(meta["frame"]["origin_m"], nlohmann::ordered_json({0.0, 0.0, 0.0}));  // the world frame
+  EXPECT_EQ(meta["frame"]["yaw_deg"].get<double>(), 0.0);
   EXPECT_EQ(meta["x_min_m"].get<double>(), -1.0);
   EXPECT_EQ(meta["y_max_m"].get<double>(), 2.0);
   EXPECT_EQ(meta["cell_m"].get<double>(), 0.5);
