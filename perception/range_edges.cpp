@@ -88,10 +88,11 @@ struct Penalty {
 struct NoiseU {
   float sq, k;
   explicit NoiseU(const SensorModel& s) : sq(float(std::sqrt(s.quantizationVariance()))), k(float(s.noise_k)) {}
-  float sigma(float u) const {
+  float variance(float u) const {
     const float q = sq * u * u;
-    return std::sqrt(k * k + q * q);
+    return k * k + q * q;
   }
+  float sigma(float u) const { return std::sqrt(variance(u)); }
 };
 
 // B&Z's SOR step f ← f − ω·(∂E/∂f)/T on n pixels `fo` of one colour: the data term (f − u)²/σ_u²,
@@ -105,10 +106,10 @@ void sorRun(float* __restrict fo, const float* __restrict fr, const float* __res
             const float* __restrict su, const float* __restrict ku, int n, const NoiseU noise,
             const Penalty g) {
   for (int j = 0; j < n; ++j) {
-    // A pixel without data has u = 0 and only links with k = 0, so its f stays 0; its σ is offset
-    // by 1 so that nothing divides by 0.
-    const float sigma = noise.sigma(u[j]) + (u[j] == 0.0f ? 1.0f : 0.0f);
-    const float fi = fo[j], w = 1.0f / (sigma * sigma);
+    // A pixel without data has u = 0 and only links with k = 0, so its f stays 0; its σ_u² is
+    // offset by 1 so that nothing divides by 0. (The variance, not σ: no square root per step.)
+    const float var = noise.variance(u[j]) + (u[j] == 0.0f ? 1.0f : 0.0f);
+    const float fi = fo[j], w = 1.0f / var;
     const float grad = 2.0f * w * (fi - u[j]) - kr[j] * g.deriv(kr[j] * (fr[j] - fi - sr[j])) +
                        kl[j] * g.deriv(kl[j] * (fi - fl[j] - sl[j])) -
                        kd[j] * g.deriv(kd[j] * (fd[j] - fi - sd[j])) +
