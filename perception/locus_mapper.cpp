@@ -702,6 +702,25 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
   return out;
 }
 
+Eigen::Vector3d LocusMapper::surfaceNormal(const LocusHit& hit) const {
+  // The hit's place in the image: fractional row and column, inside the 2×2 cell (r0, c0).
+  const double row = std::clamp((phi0_ - hit.phi) * inv_dphi_, 0.0, last_row_);
+  const double col = std::clamp((hit.theta - theta0_) * inv_dtheta_, 0.0, last_col_);
+  const int r0 = std::min(int(row), rows_ - 2), c0 = std::min(int(col), cols_ - 2);
+  const double fr = row - r0, fc = col - c0;
+  const double i00 = image_.range(r0, c0), i01 = image_.range(r0, c0 + 1);
+  const double i10 = image_.range(r0 + 1, c0), i11 = image_.range(r0 + 1, c0 + 1);
+  const double rho = (1 - fr) * ((1 - fc) * i00 + fc * i01) + fr * ((1 - fc) * i10 + fc * i11);
+  // dρ/dφ and dρ/dθ of the bilinear patch (rows run down in φ, columns up in θ).
+  const double drho_dphi = -((1 - fc) * (i10 - i00) + fc * (i11 - i01)) * inv_dphi_;
+  const double drho_dtheta = ((1 - fr) * (i01 - i00) + fr * (i11 - i10)) * inv_dtheta_;
+  const double sp = std::sin(hit.phi), cp = std::cos(hit.phi), st = std::sin(hit.theta), ct = std::cos(hit.theta);
+  const Eigen::Vector3d d(st, cp * ct, sp * ct), d_phi(0, -sp * ct, cp * ct), d_theta(ct, -cp * st, -sp * st);
+  Eigen::Vector3d n = (drho_dphi * d + rho * d_phi).cross(drho_dtheta * d + rho * d_theta);
+  if (n.dot(d) > 0) n = -n;  // towards the sensor
+  return rot_SW_.transpose() * n.normalized();  // sensor frame → map frame
+}
+
 ElevationMap LocusMapper::mapPolygon(const std::vector<Eigen::Vector2d>& polygon, double cell_m) const {
   if (polygon.size() < 3) throw std::invalid_argument("LocusMapper::mapPolygon: needs at least 3 vertices");
   Eigen::AlignedBox2d box;

@@ -76,6 +76,15 @@ class LocusMapper {
   // search runs from +v towards −v) meets the surface the sensor saw. Thread-safe.
   LocusHit intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const;
 
+  // The unit normal, in the map frame, of the surface the search met at a Known `hit` (the image's
+  // ranges interpolated bilinearly in its scan angles, as the search interpolates them): the
+  // cross product of the surface's derivatives in φ and θ, oriented towards the sensor. What a
+  // derivative of f(u, v) by the line's pose needs (the iconic gradient, paper eq. 8).
+  Eigen::Vector3d surfaceNormal(const LocusHit& hit) const;
+
+  const RangeImage& image() const { return image_; }
+  const Eigen::Isometry3d& mapFrame() const { return T_WM_; }
+
   // The elevation at any (x, y): the vertical line through it.
   LocusHit elevationAt(double x, double y) const {
     return intersect({x, y, 0.0}, Eigen::Vector3d::UnitZ());

@@ -1,0 +1,64 @@
+#pragma once
+// Iconic matching (paper §4.2): the error E of eq. 6 between map 1 and range image 2 under a
+// candidate transform, and its gradient by eq. 7–8 (docs/matching.md, "Iconic matching").
+#include <Eigen/Geometry>
+#include <vector>
+
+#include "perception/elevation_map.hpp"
+#include "perception/locus_mapper.hpp"
+#include "perception/rigid_transform.hpp"
+
+namespace ambler::perception {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+struct IconicError {
+  double E = 0;                              // Σ ‖f₁(u, v) − g(u, v, T)‖² over the overlap, m²
+  PoseVector gradient = PoseVector::Zero();  // ∂E/∂ν
+  Matrix6d JtJ = Matrix6d::Zero();           // Σ J·Jᵀ of the residuals' Jacobians (Gauss–Newton)
+  long overlap = 0;                          // lines where both maps are known
+};
+
+// ν = (r, t) is T: map 1's frame → image 2's map frame (u′ = R·u + t, v′ = R·v). For every Known
+// cell of map1, the vertical line (u, v) through its centre is moved to (u′, v′) and met with
+// image 2 by the generalized locus algorithm (image2.intersect: no resampling of map 2), g is
+// that point taken back by T⁻¹ (eq. 5), and E sums ‖f₁ − g‖² where image 2 has a Known crossing.
+// The gradient (eq. 7–8) goes through the surface at each hit: for a locally planar surface with
+// normal n at the crossing, s = n·(p − u′)/(n·v′), so ∂s/∂ν = −n·(∂u′/∂ν + s·∂v′/∂ν)/(n·v′), with
+// ∂R/∂r from the exponential map (Gallego & Yezzi's closed form). In parallel over map rows;
+// deterministic.
+IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
+                        bool with_gradient = true);
+
+struct IconicOptions {
+  int max_iterations = 100;
+  double min_relative_decrease = 1e-6;  // stop when the mean squared residual falls by less than this
+  double floor_m = 1e-4;                // or when the RMS residual is below this (what the sensor allows)
+};
+
+struct IconicResult {
+  PoseVector nu = PoseVector::Zero();  // the estimate of T (map 1 → image 2's frame)
+  int iterations = 0;
+  std::vector<double> rms_m;           // RMS residual per iteration (the first: at the start)
+  long overlap = 0;
+  Matrix6d covariance = Matrix6d::Zero();  // σ²·(JᵀJ)⁻¹ at the estimate, σ² = E/(N − 6)
+  bool converged = false;
+};
+
+// The paper's gradient descent (eq. 4), ν ← ν − k·∂E/∂ν, with a step per parameter,
+// k_i = k/(JᵀJ)_ii (rotations and translations have different units; the paper leaves k to the
+// user), k halved until the mean squared residual decreases and grown again after each success,
+// until the decrease is below min_relative_decrease or the RMS below floor_m.
+IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
+                                   const IconicOptions& options = {});
+
+// Levenberg–Marquardt on the same residuals r = z₁ − s: (JᵀJ + λ·diag JᵀJ)·δ = −Jᵀr, λ divided by 10
+// after a step that lowers the mean squared residual and multiplied by 10 otherwise.
+IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
+                                      const IconicOptions& options = {});
+
+// ∂R/∂r_k for R = exp([r]×) (k = 0, 1, 2): (r_k·[r]× + [r × (I − R)·e_k]×)·R / |r|², and [e_k]× at
+// r = 0.
+Eigen::Matrix3d rotationDerivative(const Eigen::Vector3d& r, int k);
+
+}  // namespace ambler::perception
