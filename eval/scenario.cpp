@@ -241,9 +241,54 @@ MapSpec readMap(const Reader& reader, const YAML::Node& node) {
   return m;
 }
 
+MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int views) {
+  const Fields f(reader, node, "matching", {"pairs", "methods", "initial_error", "success"});
+  MatchingSpec m;
+  if (views < 2) reader.fail("matching", "needs at least two views, the scenario has " + std::to_string(views));
+  if (const auto p = f.get("pairs")) {
+    if (!p->IsSequence() || p->size() == 0) reader.fail("matching.pairs", "expected a non-empty list of [I, J] pairs, got " + shown(*p));
+    for (std::size_t i = 0; i < p->size(); ++i) {
+      const std::string path = "matching.pairs[" + std::to_string(i) + "]";
+      const auto ij = reader.numbers<2>((*p)[i], path, kAny);
+      for (const double v : ij)
+        if (v != std::floor(v) || v < 0 || v >= views)
+          reader.fail(path, "expected two view indices in [0, " + std::to_string(views - 1) + "], got " + shown((*p)[i]));
+      if (ij[0] == ij[1]) reader.fail(path, "a view cannot be registered against itself");
+      m.pairs.emplace_back(int(ij[0]), int(ij[1]));
+    }
+  } else {
+    for (int j = 1; j < views; ++j) m.pairs.emplace_back(j - 1, j);
+  }
+  if (const auto ms = f.get("methods")) {
+    if (!ms->IsSequence() || ms->size() == 0) reader.fail("matching.methods", "expected a non-empty list of methods, got " + shown(*ms));
+    m.methods.clear();
+    for (std::size_t i = 0; i < ms->size(); ++i) {
+      const std::string path = "matching.methods[" + std::to_string(i) + "]";
+      const std::string_view name = reader.choice((*ms)[i], path, {"iconic", "iconic_lm", "features", "features+iconic",
+                                                                   "iconic_weighted", "icp_point_to_plane", "gicp", "fgr"});
+      if (name == "iconic") m.methods.push_back(MatchMethod::Iconic);
+      else if (name == "iconic_lm") m.methods.push_back(MatchMethod::IconicLm);
+      else reader.fail(path, std::string(name) + " is not built yet (built: iconic, iconic_lm)");
+    }
+  }
+  if (const auto e = f.get("initial_error")) {
+    const Fields fe(reader, *e, "matching.initial_error", {"xyz_m", "rpy_deg"});
+    if (const auto xyz = fe.numbers<3>("xyz_m", {-3.0, 3.0, false, false}))
+      m.initial_error.xyz_m = {(*xyz)[0], (*xyz)[1], (*xyz)[2]};
+    if (const auto rpy = fe.numbers<3>("rpy_deg", {-30.0, 30.0, false, false}))
+      m.initial_error.rpy_rad = {degToRad((*rpy)[0]), degToRad((*rpy)[1]), degToRad((*rpy)[2])};
+  }
+  if (const auto s = f.get("success")) {
+    const Fields fs(reader, *s, "matching.success", {"translation_m", "rotation_deg"});
+    m.success_translation_m = fs.number("translation_m", kPositive, m.success_translation_m);
+    m.success_rotation_deg = fs.number("rotation_deg", kPositive, m.success_rotation_deg);
+  }
+  return m;
+}
+
 Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::path& file) {
   const Fields f(reader, root, "",
-                 {"name", "description", "seed", "terrain", "sensor", "views", "map"});
+                 {"name", "description", "seed", "terrain", "sensor", "views", "map", "matching"});
   Scenario s;
   s.file = file;
   s.name = reader.string(f.required("name"), "name");
@@ -263,6 +308,10 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
   if (const auto node = f.get("sensor")) s.sensor = readSensor(reader, *node);
   s.views = readViews(reader, f.required("views"));
   if (const auto node = f.get("map")) s.map = readMap(reader, *node);
+  if (const auto node = f.get("matching")) {
+    if (!s.map) reader.fail("matching", "needs a map section: the views are matched through their maps");
+    s.matching = readMatching(reader, *node, int(s.views.size()));
+  }
   return s;
 }
 
@@ -270,6 +319,7 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
 
 const char* shadowsName(perception::ShadowMethod m) { return m == perception::ShadowMethod::Gnc ? "gnc" : "none"; }
 const char* baselineName(Baseline b) { return b == Baseline::Cartesian ? "cartesian" : "none"; }
+const char* matchMethodName(MatchMethod m) { return m == MatchMethod::Iconic ? "iconic" : "iconic_lm"; }
 
 perception::MapGrid MapSpec::grid() const {
   return perception::MapGrid::covering(x_m[0], x_m[1], y_m[0], y_m[1], cell_m);

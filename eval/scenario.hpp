@@ -49,6 +49,19 @@ struct MapSpec {
   perception::ScanToMapConfig scanToMapConfig() const;
 };
 
+// The registration methods a `matching:` section may name (docs/scenario.md, "matching"):
+// the paper's gradient descent and Levenberg-Marquardt on the same residuals.
+enum class MatchMethod : std::uint8_t { Iconic, IconicLm };
+const char* matchMethodName(MatchMethod m);
+
+struct MatchingSpec {
+  std::vector<std::pair<int, int>> pairs;  // (I, J): view J registered against view I
+  std::vector<MatchMethod> methods{MatchMethod::IconicLm};
+  ViewSpec initial_error;                  // the rover's dead-reckoning error E: T_0 = T_IJ·E
+  double success_translation_m = 0.05;
+  double success_rotation_deg = 0.5;
+};
+
 struct Scenario {
   std::filesystem::path file;       // where it was loaded from (for messages and relative paths)
   std::string name;
@@ -58,6 +71,7 @@ struct Scenario {
   perception::SensorModel sensor;
   std::vector<ViewSpec> views;
   std::optional<MapSpec> map;       // absent: no maps
+  std::optional<MatchingSpec> matching;  // absent: no registration
 };
 
 // Loads and validates a scenario. Throws ScenarioError naming the file and the key for a missing

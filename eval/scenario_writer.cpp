@@ -161,6 +161,19 @@ std::string resolvedYaml(const Scenario& s) {
     y += std::string("  shadows: ") + shadowsName(m.shadows) + "\n";
     y += std::string("  baseline: ") + baselineName(m.baseline) + "\n";
   }
+  if (s.matching) {
+    const auto& m = *s.matching;
+    y += "matching:\n  pairs: [";
+    for (std::size_t i = 0; i < m.pairs.size(); ++i)
+      y += (i ? ", " : "") + list({std::to_string(m.pairs[i].first), std::to_string(m.pairs[i].second)});
+    y += "]\n  methods: [";
+    for (std::size_t i = 0; i < m.methods.size(); ++i) y += std::string(i ? ", " : "") + matchMethodName(m.methods[i]);
+    const auto& e = m.initial_error;
+    y += "]\n  initial_error: {xyz_m: " + list({num(e.xyz_m.x()), num(e.xyz_m.y()), num(e.xyz_m.z())}) +
+         ", rpy_deg: " + list({deg(e.rpy_rad.x()), deg(e.rpy_rad.y()), deg(e.rpy_rad.z())}) + "}\n";
+    y += "  success: {translation_m: " + num(m.success_translation_m) + ", rotation_deg: " +
+         num(m.success_rotation_deg) + "}\n";
+  }
   return y;
 }
 

@@ -21,6 +21,7 @@ const std::vector<Stage>& runStages() {
       stages::scan(),
       stages::map(),
       stages::cartesian(),
+      stages::match(),
   };
   return all;
 }

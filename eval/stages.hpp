@@ -23,6 +23,7 @@ Stage world();      // the MuJoCo world, its ray scene and ground truth; terrain
 Stage scan();       // one ERIM scan per view; scans/
 Stage map();        // the locus map of each scan, scored; maps/
 Stage cartesian();  // the Cartesian baseline of each scan, scored; maps/
+Stage match();      // each pair of views registered by each method, scored; matching/
 }  // namespace stages
 
 }  // namespace ambler::eval

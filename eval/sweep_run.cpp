@@ -35,13 +35,16 @@ std::string numberText(double v) {
   return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
 }
 
-// The scalar leaves of metrics.json in document order, arrays by index: map.0.rms_error_m.
+// The scalar leaves of metrics.json in document order, arrays by index: map.0.rms_error_m. The
+// measured times (timing_s, and time_s of each registration) only with `timing`: they are the
+// figures that are not reproducible.
 void flatten(const nlohmann::ordered_json& j, const std::string& path, bool timing, Row& out) {
   if (j.is_object() || j.is_array()) {
     std::size_t i = 0;
     for (auto it = j.begin(); it != j.end(); ++it, ++i) {
       const std::string key = j.is_object() ? it.key() : std::to_string(i);
-      if (path.empty() && key == "timing_s" && !timing) continue;
+      if (!timing && ((path.empty() && key == "timing_s") || (key == "time_s" && path.rfind("registration.", 0) == 0)))
+        continue;
       flatten(*it, path.empty() ? key : path + "." + key, timing, out);
     }
     return;

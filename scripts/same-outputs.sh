@@ -2,7 +2,7 @@
 # Do the outputs change? Builds revision REV (default HEAD) in a temporary worktree, runs the demo,
 # ledge, plane and mars scenarios and one sweep (scenarios/sweeps/noise_check.yaml) with it and with
 # this tree's build/ambler, and compares every file byte for byte: metrics.json without its
-# timing_s block, rasters, pictures, scans, results.csv. Prints each file that differs (and, for
+# timing_s block (and each registration's time_s), rasters, pictures, scans, results.csv. Prints each file that differs (and, for
 # metrics.json, the differing values) and exits 1 if any does.
 #   bash scripts/same-outputs.sh [REV]        # this tree must be built (scripts/build.sh)
 # Needs git and jq (scripts/setup.sh installs both). The other revision's build is kept in
@@ -44,16 +44,18 @@ run_all "$cache/build/ambler" "$out/before"
 echo "same-outputs: running this tree" >&2
 run_all "$root/build/ambler" "$out/after"
 
+# The measured times: timing_s, a registration's time_s (in metrics.json and matching/*.json).
+untimed='del(.timing_s) | del(.time_s) | if .registration then .registration |= map(del(.time_s)) else . end'
 status=0
 while IFS= read -r f; do
   a=$out/before/$f b=$out/after/$f
   if [ ! -e "$b" ]; then echo "only before: $f"; status=1; continue; fi
   case "$f" in
-    */metrics.json)
-      if ! cmp -s <(jq -S 'del(.timing_s)' "$a") <(jq -S 'del(.timing_s)' "$b"); then
+    */metrics.json|*/matching/*.json)
+      if ! cmp -s <(jq -S "$untimed" "$a") <(jq -S "$untimed" "$b"); then
         echo "differs: $f"; status=1
-        diff <(jq -S 'del(.timing_s)' "$a" | jq -c 'paths(scalars) as $p | [($p|map(tostring)|join(".")), getpath($p)]') \
-             <(jq -S 'del(.timing_s)' "$b" | jq -c 'paths(scalars) as $p | [($p|map(tostring)|join(".")), getpath($p)]') |
+        diff <(jq -S "$untimed" "$a" | jq -c 'paths(scalars) as $p | [($p|map(tostring)|join(".")), getpath($p)]') \
+             <(jq -S "$untimed" "$b" | jq -c 'paths(scalars) as $p | [($p|map(tostring)|join(".")), getpath($p)]') |
           head -40 || true
       fi ;;
     *) cmp -s "$a" "$b" || { echo "differs: $f"; status=1; } ;;

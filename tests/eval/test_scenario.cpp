@@ -101,6 +101,17 @@ void expectSame(const Scenario& a, const Scenario& b) {
     EXPECT_EQ(a.map->shadows, b.map->shadows);
     EXPECT_EQ(a.map->baseline, b.map->baseline);
   }
+  ASSERT_EQ(a.matching.has_value(), b.matching.has_value());
+  if (a.matching) {
+    EXPECT_EQ(a.matching->pairs, b.matching->pairs);
+    EXPECT_EQ(a.matching->methods, b.matching->methods);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_SAME(a.matching->initial_error.xyz_m[i], b.matching->initial_error.xyz_m[i]);
+      EXPECT_SAME(a.matching->initial_error.rpy_rad[i], b.matching->initial_error.rpy_rad[i]);
+    }
+    EXPECT_SAME(a.matching->success_translation_m, b.matching->success_translation_m);
+    EXPECT_SAME(a.matching->success_rotation_deg, b.matching->success_rotation_deg);
+  }
 }
 
 // parseScenario(resolvedYaml(s)) == s, and resolving again changes nothing.
@@ -481,7 +492,7 @@ TEST(ScenarioErrors, UnknownKeysEverywhere) {
   expectError(kMinimal + "map: {region: {x_m: [0, 1], z_m: [0, 1]}}\n", "map.region.z_m",
               "unknown key");
   expectError(kMinimal + "colour: red\n", "colour",
-              "unknown key (allowed: name, description, seed, terrain, sensor, views, map)");
+              "unknown key (allowed: name, description, seed, terrain, sensor, views, map, matching)");
   expectError(
       "name: t\nterrain: {kind: plane, rocks: {abundance: 0.1}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
       "terrain.rocks.abundance", "did you mean abundance_k?");
@@ -644,6 +655,54 @@ TEST(ScenarioErrors, DocumentShape) {
   EXPECT_EQ(errorOf("- a\n- b\n"),
             kFile + ": expected a mapping of scenario keys, got a list of 2");
   expectError(kMinimal + "[a]: 1\n", "", "expected plain names as keys");
+}
+
+}  // namespace
+}  // namespace ambler::eval
+
+namespace ambler::eval {
+namespace {
+
+const std::string kThreeViews =
+    "name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}, {xyz_m: [1, 0, 1]}, {xyz_m: [2, 0, 1]}]\nmap: {}\n";
+
+// matching: {} registers each view against the one before with Levenberg-Marquardt from no error;
+// every key read back bit for bit.
+TEST(ScenarioMatching, DefaultsAndRoundTrip) {
+  const Scenario d = parseScenario(kThreeViews + "matching: {}\n", kFile);
+  ASSERT_TRUE(d.matching.has_value());
+  EXPECT_EQ(d.matching->pairs, (std::vector<std::pair<int, int>>{{0, 1}, {1, 2}}));
+  EXPECT_EQ(d.matching->methods, std::vector<MatchMethod>{MatchMethod::IconicLm});
+  EXPECT_EQ(d.matching->initial_error.xyz_m, Eigen::Vector3d::Zero());
+  EXPECT_EQ(d.matching->success_translation_m, 0.05);
+  EXPECT_EQ(d.matching->success_rotation_deg, 0.5);
+  expectRoundTrip(d);
+  const Scenario full = parseScenario(kThreeViews + "matching: {pairs: [[0, 2], [2, 1]], methods: [iconic, iconic_lm], "
+                                                    "initial_error: {xyz_m: [0.5, -0.3, 0.1], rpy_deg: [1, -2, 5]}, "
+                                                    "success: {translation_m: 0.1, rotation_deg: 1}}\n",
+                                      kFile);
+  EXPECT_EQ(full.matching->pairs, (std::vector<std::pair<int, int>>{{0, 2}, {2, 1}}));
+  EXPECT_EQ(full.matching->methods, (std::vector<MatchMethod>{MatchMethod::Iconic, MatchMethod::IconicLm}));
+  EXPECT_NEAR(full.matching->initial_error.rpy_rad.z(), 5 * std::numbers::pi / 180, 1e-15);
+  expectRoundTrip(full);
+}
+
+// Bad matching sections: one line naming the file and the key, as everywhere.
+TEST(ScenarioMatching, RefusesBadInput) {
+  expectError(kThreeViews + "matching: {pairs: [[0, 3]]}\n", "matching.pairs[0]", "view indices in [0, 2]");
+  expectError(kThreeViews + "matching: {pairs: [[1, 1]]}\n", "matching.pairs[0]", "against itself");
+  expectError(kThreeViews + "matching: {pairs: [[0, 1.5]]}\n", "matching.pairs[0]", "view indices");
+  expectError(kThreeViews + "matching: {methods: [iconik]}\n", "matching.methods[0]", "did you mean iconic");
+  expectError(kThreeViews + "matching: {methods: [features]}\n", "matching.methods[0]", "not built yet");
+  expectError(kThreeViews + "matching: {initial_error: {xyz_m: [5, 0, 0]}}\n", "matching.initial_error.xyz_m[0]",
+              "in [-3, 3]");
+  expectError(kThreeViews + "matching: {initial_error: {rpy_deg: [0, 0, 40]}}\n", "matching.initial_error.rpy_deg[2]",
+              "in [-30, 30]");
+  expectError(kThreeViews + "matching: {success: {translation_m: 0}}\n", "matching.success.translation_m", "> 0");
+  expectError(kThreeViews + "matching: {pair: [[0, 1]]}\n", "matching.pair", "unknown key (did you mean pairs?)");
+  expectError(kMinimal + "map: {}\nmatching: {}\n", "matching", "at least two views");
+  expectError("name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}, {xyz_m: [1, 0, 1]}]\nmatching: {}\n",
+              "matching", "needs a map section");
 }
 
 }  // namespace
