@@ -3,7 +3,10 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace ambler::perception {
@@ -29,13 +32,52 @@ double meanSquare(const IconicError& e) { return e.overlap ? e.E / double(e.over
 void finishResult(IconicResult& res, const ElevationMap& map1, const LocusMapper& image2) {
   const IconicError e = iconicError(map1, image2, res.nu);
   res.overlap = e.overlap;
-  if (e.overlap > 6) {
+  // Rotations weigh as the motion they give at half the map's diagonal.
+  const MapGrid& g = map1.grid();
+  const Degeneracy d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell));
+  res.degenerate = d.degenerate;
+  res.free_directions = d.free_directions;
+  if (e.overlap > 6 && !d.degenerate) {
     const double s2 = e.E / double(e.overlap - 6);
     res.covariance = s2 * e.JtJ.ldlt().solve(Matrix6d::Identity());
+  } else {
+    res.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());  // unbounded along a free direction
   }
 }
 
 }  // namespace
+
+Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio) {
+  PoseVector s;
+  s << 1 / length_m, 1 / length_m, 1 / length_m, 1, 1, 1;  // ν = S·μ with μ in metres
+  const Matrix6d M = s.asDiagonal() * JtJ * s.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(M);
+  const double top = eig.eigenvalues()(5);
+  static const char* kNames[6] = {"rx", "ry", "rz", "tx", "ty", "tz"};
+  Degeneracy d;
+  // The weak subspace, and each parameter's share of it: a parameter mostly inside it is free
+  // (the solver may return any basis of a subspace of equal eigenvalues, so name by projection).
+  std::vector<int> weak;
+  for (int i = 0; i < 6; ++i)
+    if (!(top > 0) || eig.eigenvalues()(i) < ratio * top) weak.push_back(i);
+  if (weak.empty()) return d;
+  d.degenerate = true;
+  Matrix6d P = Matrix6d::Zero();
+  for (const int i : weak) P += eig.eigenvectors().col(i) * eig.eigenvectors().col(i).transpose();
+  std::vector<bool> named(6, false);
+  for (int k = 0; k < 6; ++k) named[k] = P(k, k) > 0.5;
+  // A weak direction that mixes parameters (yaw about a point off the origin) is named by its
+  // largest component.
+  if (std::count(named.begin(), named.end(), true) < long(weak.size()))
+    for (const int i : weak) {
+      int k = 0;
+      eig.eigenvectors().col(i).cwiseAbs().maxCoeff(&k);
+      named[k] = true;
+    }
+  for (int k = 0; k < 6; ++k)
+    if (named[k]) d.free_directions.push_back(kNames[k]);
+  return d;
+}
 
 Eigen::Matrix3d rotationDerivative(const Eigen::Vector3d& r, int k) {
   const Eigen::Vector3d e = Eigen::Vector3d::Unit(k);

@@ -2,6 +2,7 @@
 // Iconic matching (paper §4.2): the error E of eq. 6 between map 1 and range image 2 under a
 // candidate transform, and its gradient by eq. 7–8 (docs/matching.md, "Iconic matching").
 #include <Eigen/Geometry>
+#include <string>
 #include <vector>
 
 #include "perception/elevation_map.hpp"
@@ -43,7 +44,22 @@ struct IconicResult {
   long overlap = 0;
   Matrix6d covariance = Matrix6d::Zero();  // σ²·(JᵀJ)⁻¹ at the estimate, σ² = E/(N − 6)
   bool converged = false;
+  // Whether the surface leaves some motion unconstrained (degeneracy()), and which: the
+  // parameters ("rx", "ry", "rz", "tx", "ty", "tz") that dominate each weak direction.
+  bool degenerate = false;
+  std::vector<std::string> free_directions;
 };
+
+struct Degeneracy {
+  bool degenerate = false;
+  std::vector<std::string> free_directions;
+};
+
+// The weak directions of JᵀJ: rotations expressed in metres at `length_m` (so that all six are
+// in m²), the eigenvectors whose eigenvalue is below `ratio` of the largest are unconstrained
+// (σ at least 1/√ratio, 100 times, the best-determined direction's by default); each is named by
+// its largest component. A level plane leaves tx, ty and rz free; a sinusoid along x leaves ty.
+Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio = 1e-4);
 
 // The paper's gradient descent (eq. 4), ν ← ν − k·∂E/∂ν, with a step per parameter,
 // k_i = k/(JᵀJ)_ii (rotations and translations have different units; the paper leaves k to the

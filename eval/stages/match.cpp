@@ -69,8 +69,10 @@ void run(RunState& s) {
       pair["success"] = success;
       pair["iterations"] = res.iterations;
       pair["time_s"] = seconds;
-      pair["covariance"] = matrixJson(res.covariance);  // of ν (world → believed world), rx ry rz tx ty tz
-      pair["degenerate"] = false;                       // not assessed yet (docs/matching.md)
+      // Of ν (world → believed world), rx ry rz tx ty tz; null where a direction is free.
+      pair["covariance"] = res.degenerate ? nlohmann::ordered_json(nullptr) : matrixJson(res.covariance);
+      pair["degenerate"] = res.degenerate;
+      pair["free_directions"] = res.free_directions;
       pair["overlap"] = res.overlap;
       nlohmann::ordered_json trace = nlohmann::ordered_json::array();
       for (std::size_t k = 0; k < res.rms_m.size(); ++k) trace.push_back({{"iteration", k}, {"rms_m", res.rms_m[k]}});

@@ -12,6 +12,7 @@
 
 #include "perception/iconic.hpp"
 #include "perception/scan_to_map.hpp"
+#include "synthetic.hpp"
 #include "perception/sensor_geometry.hpp"
 
 namespace ambler::perception {
@@ -188,9 +189,39 @@ TEST(Iconic, DescentAndLevenbergMarquardtRecoverTheTransform) {
     EXPECT_LT(err.rotation_deg, 0.05) << (lm ? "LM" : "descent") << " after " << res.iterations;
     EXPECT_GT(res.overlap, 1000);
     EXPECT_LT(res.rms_m.back(), res.rms_m.front());
+    EXPECT_FALSE(res.degenerate) << "free: " << res.free_directions.size();
     std::printf("%s: %d iterations, RMS %.4f -> %.5f m, error %.2e m %.2e deg\n", lm ? "LM" : "descent",
                 res.iterations, res.rms_m.front(), res.rms_m.back(), err.translation_m, err.rotation_deg);
   }
+}
+
+}  // namespace
+}  // namespace ambler::perception
+
+namespace ambler::perception {
+namespace {
+
+// A level plane constrains only tz and the two tilts: tx, ty and rz are flagged free, and the
+// covariance is not given. The caps constrain all six.
+TEST(Iconic, PlaneIsDegenerateInXYAndYaw) {
+  const test::Plane plane{0.0, 0.0, 0.0};
+  const RangeImage image2 = test::planeImage(plane, sensorPose({0.3, -2.5, 3}, {0, -32 * kDeg, -4 * kDeg}));
+  LocusConfig config;
+  config.sensor.noise_k = 0, config.sensor.quantization_m = 0;
+  const LocusMapper mapper(image2, nullptr, config);
+  ElevationMap map1(MapGrid::covering(-3, 3, 1.5, 8, 0.1));
+  for (int r = 0; r < map1.grid().rows; ++r)
+    for (int c = 0; c < map1.grid().cols; ++c) map1.setKnown(r, c, 0.0f, 1e-3f);
+  PoseVector start;
+  start << 0.01, -0.01, 0.02, 0.1, 0.1, 0.05;
+  const IconicResult res = iconicLevenbergMarquardt(map1, mapper, start);
+  EXPECT_TRUE(res.degenerate);
+  EXPECT_EQ(res.free_directions, (std::vector<std::string>{"rz", "tx", "ty"}));
+  EXPECT_TRUE(std::isnan(res.covariance(0, 0)));
+  // What the plane does fix comes back: tz and the tilts (the free ones stay where they began).
+  const Eigen::Isometry3d T = poseFromVector(res.nu);
+  EXPECT_NEAR(T.translation().z(), 0.0, 1e-3);
+  EXPECT_LT(std::abs(T.linear()(2, 0)) + std::abs(T.linear()(2, 1)), 1e-3);
 }
 
 }  // namespace
