@@ -21,13 +21,25 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
 
 // One map row's share of E and its gradient.
 struct RowSum {
-  double E = 0;
+  double E = 0, sum_r2 = 0;
   PoseVector gradient = PoseVector::Zero();
   Matrix6d JtJ = Matrix6d::Zero();
   long overlap = 0;
 };
 
 double meanSquare(const IconicError& e) { return e.overlap ? e.E / double(e.overlap) : 0.0; }
+double rms(const IconicError& e) { return e.overlap ? std::sqrt(e.sum_r2 / double(e.overlap)) : 0.0; }
+
+// The median σ_z of a map's known cells, at least the sensor model's 1 mm floor.
+double medianSigma(const ElevationMap& map) {
+  std::vector<float> s;
+  for (long i = 0; i < map.state().size(); ++i)
+    if (map.state().data()[i] == std::uint8_t(CellState::Known) && std::isfinite(map.sigma().data()[i]))
+      s.push_back(map.sigma().data()[i]);
+  if (s.empty()) return 1e-3;
+  std::nth_element(s.begin(), s.begin() + long(s.size() / 2), s.end());
+  return std::max(1e-3, double(s[s.size() / 2]));
+}
 
 void finishResult(IconicResult& res, const ElevationMap& map1, const LocusMapper& image2) {
   const IconicError e = iconicError(map1, image2, res.nu);
@@ -87,7 +99,33 @@ Eigen::Matrix3d rotationDerivative(const Eigen::Vector3d& r, int k) {
   return (r(k) * skew(r) + skew(r.cross((Eigen::Matrix3d::Identity() - R) * e))) * R / n2;
 }
 
-IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, bool with_gradient) {
+std::vector<Eigen::Vector3d> referenceNormals(const ElevationMap& map) {
+  const MapGrid& g = map.grid();
+  std::vector<Eigen::Vector3d> n(std::size_t(g.cells()), Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  const auto known = [&](int r, int c) {
+    return r >= 0 && c >= 0 && r < g.rows && c < g.cols && map.stateAt(r, c) == CellState::Known;
+  };
+  // dz per metre across cells (r, c ± k) or (r ± k, c), the widest span of 2 or 1 that is known.
+  const auto slope = [&](int r, int c, int dr, int dc, double& out) {
+    for (int k = 2; k >= 1; --k)
+      if (known(r - k * dr, c - k * dc) && known(r + k * dr, c + k * dc)) {
+        out = (double(map.elevation()(r + k * dr, c + k * dc)) - map.elevation()(r - k * dr, c - k * dc)) /
+              (2 * k * g.cell);
+        return true;
+      }
+    return false;
+  };
+  for (int r = 0; r < g.rows; ++r)
+    for (int c = 0; c < g.cols; ++c) {
+      double zx = 0, zy = 0;
+      if (!known(r, c) || !slope(r, c, 0, 1, zx) || !slope(r, c, -1, 0, zy)) continue;  // row − 1 is +y
+      n[std::size_t(r) * g.cols + c] = Eigen::Vector3d(-zx, -zy, 1).normalized();
+    }
+  return n;
+}
+
+IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, bool with_gradient,
+                        double cauchy_c, const std::vector<Eigen::Vector3d>* reference_normals) {
   const MapGrid& grid = map1.grid();
   const Eigen::Isometry3d T = poseFromVector(nu);
   const Eigen::Matrix3d R = T.linear();
@@ -109,24 +147,28 @@ IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, con
         if (hit.state != CellState::Known) continue;
         // g = T⁻¹·f₂ = u + s·v: f₁ − g is (z₁ − s)·v.
         const double diff = double(map1.elevation()(r, c)) - hit.s;
-        sum.E += diff * diff;
+        const double w = cauchy_c > 0 ? 1.0 / (1.0 + diff * diff / (cauchy_c * cauchy_c)) : 1.0;
+        sum.E += cauchy_c > 0 ? cauchy_c * cauchy_c * std::log1p(diff * diff / (cauchy_c * cauchy_c)) : diff * diff;
+        sum.sum_r2 += diff * diff;
         ++sum.overlap;
         if (!with_gradient) continue;
-        const Eigen::Vector3d n = image2.surfaceNormal(hit);
+        const Eigen::Vector3d* ref = reference_normals ? &(*reference_normals)[std::size_t(r) * grid.cols + c] : nullptr;
+        const Eigen::Vector3d n = ref && std::isfinite(ref->x()) ? Eigen::Vector3d(R * *ref) : image2.surfaceNormal(hit);
         const double nv = n.dot(v2);
         if (std::abs(nv) < 1e-12) continue;  // the line grazes the surface: no derivative
         // The residual diff = z₁ − s has the Jacobian J = −∂s/∂ν.
         PoseVector J;
         for (int k = 0; k < 3; ++k) J(k) = n.dot(dR[k] * u + hit.s * (dR[k] * v)) / nv;
         for (int k = 0; k < 3; ++k) J(3 + k) = n(k) / nv;
-        sum.gradient += 2 * diff * J;
-        sum.JtJ += J * J.transpose();
+        sum.gradient += 2 * w * diff * J;
+        sum.JtJ += w * J * J.transpose();
       }
     }
   });
   IconicError out;
   for (const RowSum& s : rows) {  // in row order: the same sums whatever the threads did
     out.E += s.E;
+    out.sum_r2 += s.sum_r2;
     out.gradient += s.gradient;
     out.JtJ += s.JtJ;
     out.overlap += s.overlap;
@@ -175,11 +217,17 @@ IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMappe
                                       const IconicOptions& options) {
   IconicResult res;
   res.nu = nu0;
-  IconicError e = iconicError(map1, image2, res.nu);
-  res.rms_m.push_back(std::sqrt(meanSquare(e)));
+  const double c_noise = options.robust_sigmas * std::sqrt(2.0) * medianSigma(map1);
+  const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
+  const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
+  IconicError e = iconicError(map1, image2, res.nu, true, 0.0, &normals);
+  double c = scale(e);
+  if (c > 0) e = iconicError(map1, image2, res.nu, true, c, &normals);
+  res.rms_m.push_back(rms(e));
   double lambda = 1e-3;
+  const double half_diagonal = 0.5 * std::hypot(map1.grid().cols * map1.grid().cell, map1.grid().rows * map1.grid().cell);
   for (; res.iterations < options.max_iterations && e.overlap > 6; ++res.iterations) {
-    if (std::sqrt(meanSquare(e)) < options.floor_m) {
+    if (rms(e) < options.floor_m) {
       res.converged = true;
       break;
     }
@@ -187,13 +235,24 @@ IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMappe
     for (int tries = 0; tries < 12 && !stepped; ++tries) {
       Matrix6d A = e.JtJ;
       A.diagonal() += lambda * e.JtJ.diagonal();
-      const PoseVector delta = A.ldlt().solve(-0.5 * e.gradient);  // Jᵀr = ∂E/∂ν / 2
-      const IconicError t = iconicError(map1, image2, res.nu + delta);
+      const PoseVector delta = A.ldlt().solve(-0.5 * e.gradient);  // Jᵀr = ∂E/∂ν / 2 (weighted)
+      const IconicError t = iconicError(map1, image2, res.nu + delta, true, c, &normals);
       if (t.overlap > 6 && meanSquare(t) < meanSquare(e)) {
         const double decrease = (meanSquare(e) - meanSquare(t)) / meanSquare(e);
         res.nu += delta, e = t, stepped = true, lambda = std::max(lambda / 10, 1e-12);
-        res.rms_m.push_back(std::sqrt(meanSquare(e)));
-        if (decrease < options.min_relative_decrease) res.converged = true;
+        res.rms_m.push_back(rms(e));
+        // The step's largest motion of a line point: its translation plus its rotation at the map's
+        // half diagonal.
+        const double moved = delta.tail<3>().norm() + delta.head<3>().norm() * half_diagonal;
+        if (decrease < options.min_relative_decrease || moved < options.min_step_m) res.converged = true;
+        // The loss narrows with the residuals; the cost at the new scale is evaluated afresh.
+        const double c_next = scale(e);
+        if (c_next < c) {
+          c = c_next;
+          e = iconicError(map1, image2, res.nu, true, c, &normals);
+          res.converged = false;  // a narrower loss can still move the estimate
+          if (moved < options.min_step_m && c == c_noise) res.converged = true;
+        }
       } else {
         lambda *= 10;
       }
@@ -206,6 +265,18 @@ IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMappe
   }
   finishResult(res, map1, image2);
   return res;
+}
+
+IconicResult registerIconic(const ElevationMap& map_i, const RangeImage& image_j, const Raster<std::uint8_t>* edges_j,
+                            const LocusConfig& config, IconicMethod method, const IconicOptions& options) {
+  // Image J in the frame the rover believes; ν starts at the identity (it trusts its belief).
+  const LocusMapper mapper(image_j, edges_j, config);
+  return method == IconicMethod::Descent ? iconicGradientDescent(map_i, mapper, PoseVector::Zero(), options)
+                                         : iconicLevenbergMarquardt(map_i, mapper, PoseVector::Zero(), options);
+}
+
+Eigen::Isometry3d correctedPose(const IconicResult& result, const Eigen::Isometry3d& believed_WS) {
+  return poseFromVector(result.nu).inverse() * believed_WS;
 }
 
 }  // namespace ambler::perception

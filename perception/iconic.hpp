@@ -2,6 +2,7 @@
 // Iconic matching (paper §4.2): the error E of eq. 6 between map 1 and range image 2 under a
 // candidate transform, and its gradient by eq. 7–8 (docs/matching.md, "Iconic matching").
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -14,7 +15,8 @@ namespace ambler::perception {
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 
 struct IconicError {
-  double E = 0;                              // Σ ‖f₁(u, v) − g(u, v, T)‖² over the overlap, m²
+  double E = 0;                              // Σ ‖f₁(u, v) − g(u, v, T)‖² over the overlap, m² (or the robust cost)
+  double sum_r2 = 0;                         // Σ r² (the plain E, whatever the loss)
   PoseVector gradient = PoseVector::Zero();  // ∂E/∂ν
   Matrix6d JtJ = Matrix6d::Zero();           // Σ J·Jᵀ of the residuals' Jacobians (Gauss–Newton)
   long overlap = 0;                          // lines where both maps are known
@@ -28,13 +30,32 @@ struct IconicError {
 // normal n at the crossing, s = n·(p − u′)/(n·v′), so ∂s/∂ν = −n·(∂u′/∂ν + s·∂v′/∂ν)/(n·v′), with
 // ∂R/∂r from the exponential map (Gallego & Yezzi's closed form). In parallel over map rows;
 // deterministic.
+// With cauchy_c > 0 the cost is robust: E = Σ c²·ln(1 + r²/c²) (Cauchy), its gradient Σ 2w·r·J and
+// JᵀJ weighted by w = 1/(1 + r²/c²), so that lines that disagree far beyond c (overlap borders,
+// shadows, rocks seen from one side) pull little.
+//
+// With `reference_normals` (map 1's surface normals, referenceNormals), the Jacobian takes the
+// normal of map 1's surface at the cell, moved into image 2's frame, instead of image 2's at the
+// hit: the same at the solution, and far less noisy than a normal from one 2×2 cell of a noisy
+// image (Gauss-Newton's point-to-plane form). E is unchanged; the gradient is then approximate.
 IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
-                        bool with_gradient = true);
+                        bool with_gradient = true, double cauchy_c = 0,
+                        const std::vector<Eigen::Vector3d>* reference_normals = nullptr);
+
+// Map 1's unit surface normals (row-major per cell; NaN where the cell or its neighbours are not
+// known, and there image 2's normal at the hit is used): from central differences of the known
+// elevations two cells either side (one where two are not known).
+std::vector<Eigen::Vector3d> referenceNormals(const ElevationMap& map);
 
 struct IconicOptions {
   int max_iterations = 100;
   double min_relative_decrease = 1e-6;  // stop when the mean squared residual falls by less than this
   double floor_m = 1e-4;                // or when the RMS residual is below this (what the sensor allows)
+  double min_step_m = 1e-4;             // LM: or when a step moves no line point more than this
+  // LM: the Cauchy loss's scale c = max(robust_sigmas·√2·σ̃, 2·RMS of the residuals), σ̃ the median
+  // σ_z of map 1 (at least 1 mm): it starts as wide as the misalignment (the first steps are plain
+  // least squares) and narrows to the noise of a difference of two maps. 0: plain least squares.
+  double robust_sigmas = 3.0;
 };
 
 struct IconicResult {
@@ -72,6 +93,16 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
 // after a step that lowers the mean squared residual and multiplied by 10 otherwise.
 IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                       const IconicOptions& options = {});
+
+enum class IconicMethod : std::uint8_t { Descent, LevenbergMarquardt };
+
+// Registers range image J against map I as the rover would: image_j carries the pose the rover
+// believes (T_WS in map I's frame), edges_j its edge mask (or null), config the locus settings and
+// sensor model. The estimate ν is the transform from map I's frame to the believed one; the
+// corrected pose of sensor J is poseFromVector(ν)⁻¹·image_j.T_WS (correctedPose).
+IconicResult registerIconic(const ElevationMap& map_i, const RangeImage& image_j, const Raster<std::uint8_t>* edges_j,
+                            const LocusConfig& config, IconicMethod method, const IconicOptions& options = {});
+Eigen::Isometry3d correctedPose(const IconicResult& result, const Eigen::Isometry3d& believed_WS);
 
 // ∂R/∂r_k for R = exp([r]×) (k = 0, 1, 2): (r_k·[r]× + [r × (I − R)·e_k]×)·R / |r|², and [e_k]× at
 // r = 0.

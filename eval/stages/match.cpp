@@ -44,17 +44,15 @@ void run(RunState& s) {
     image.T_WS = believed_WS;
     perception::LocusConfig config = sc.map->scanToMapConfig().locus;
     config.sensor = sc.sensor;
-    const perception::LocusMapper mapper(image, vj.locus->edges ? &*vj.locus->edges : nullptr, config);
     const perception::ElevationMap& map_i = vi.locus->map;
     for (const MatchMethod method : spec.methods) {
       Stopwatch t;
-      // ν: world → believed world of J; it starts at the identity (the rover trusts T_0).
-      const perception::IconicResult res =
-          method == MatchMethod::Iconic ? perception::iconicGradientDescent(map_i, mapper, perception::PoseVector::Zero())
-                                        : perception::iconicLevenbergMarquardt(map_i, mapper, perception::PoseVector::Zero());
+      const perception::IconicResult res = perception::registerIconic(
+          map_i, image, vj.locus->edges ? &*vj.locus->edges : nullptr, config,
+          method == MatchMethod::Iconic ? perception::IconicMethod::Descent : perception::IconicMethod::LevenbergMarquardt);
       const double seconds = t.seconds();
       s.addTime("match", seconds);
-      const Eigen::Isometry3d T_est = vi.T_WS.inverse() * perception::poseFromVector(res.nu).inverse() * believed_WS;
+      const Eigen::Isometry3d T_est = vi.T_WS.inverse() * perception::correctedPose(res, believed_WS);
       const perception::PoseError err = perception::poseError(T_IJ, T_est), start = perception::poseError(T_IJ, T_0);
       const bool success = err.translation_m <= spec.success_translation_m && err.rotation_deg <= spec.success_rotation_deg;
       const std::string name = matchMethodName(method);
