@@ -12,11 +12,14 @@
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <stdexcept>
 #include <vector>
 
 #include "eval/io.hpp"
+#include "eval/runner.hpp"
 #include "eval/scenario.hpp"
 #include "perception/cartesian_mapper.hpp"
+#include "perception/iconic.hpp"
 #include "perception/scan_to_map.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
@@ -260,6 +263,75 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   j["repetitions"] = opt.repetitions;
   if (!opt.json.empty()) writeJson(opt.json, j);
   return j;
+}
+
+nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
+  if (!sc.map || !sc.matching)
+    throw std::runtime_error(sc.file.string() + ": bench match needs a scenario with map and matching sections");
+  std::fprintf(stderr, "bench match: building %s's world, scans and maps...\n", sc.name.c_str());
+  const fs::path dir = fs::temp_directory_path() / ("ambler-bench-match-" + std::to_string(::getpid()));
+  struct Cleanup {
+    fs::path dir;
+    ~Cleanup() {
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+    }
+  } cleanup{dir};
+  const sim::World world = sc.terrain.kind == terrains::TerrainKind::Mjcf
+                               ? sim::World::load(sc.terrain.mjcf)
+                               : sim::World::load(sim::writeWorld(terrains::makeTerrain(sc.terrain, sc.seed), dir, "bench"));
+  const sim::RayScene scene(world);
+  const sim::ErimScanner scanner(scene, sc.sensor);
+  const auto [i, j] = sc.matching->pairs.front();
+  const Eigen::Isometry3d T_i = perception::sensorPose(sc.views[i].xyz_m, sc.views[i].rpy_rad);
+  const Eigen::Isometry3d T_j = perception::sensorPose(sc.views[j].xyz_m, sc.views[j].rpy_rad);
+  const perception::MapGrid grid = sc.map->grid();
+  const perception::ScanToMapConfig config = sc.map->scanToMapConfig();
+  const perception::ScanMap map_i = perception::scanToMap(scanner.scan(T_i, viewSeed(sc.seed, i)).image, sc.sensor, T_i, grid, config);
+  perception::ScanMap map_j = perception::scanToMap(scanner.scan(T_j, viewSeed(sc.seed, j)).image, sc.sensor, T_j, grid, config);
+  // Image J at the pose the rover believes, as the match stage hands it over.
+  const Eigen::Isometry3d T_IJ = T_i.inverse() * T_j;
+  const Eigen::Isometry3d T_0 = T_IJ * perception::sensorPose(sc.matching->initial_error.xyz_m, sc.matching->initial_error.rpy_rad);
+  const Eigen::Isometry3d believed = T_i * T_0;
+  map_j.image.T_WS = believed;
+  perception::LocusConfig locus = config.locus;
+  locus.sensor = sc.sensor;
+  const auto* edges = map_j.edges ? &*map_j.edges : nullptr;
+
+  nlohmann::ordered_json j_out, methods = nlohmann::ordered_json::array();
+  std::printf("ambler bench match (%s, views %d-%d, %dx%d cells of %.2f m; medians of %d)\n", sc.name.c_str(), i, j,
+              grid.rows, grid.cols, grid.cell, opt.repetitions);
+  std::printf("  %-10s %10s %12s %12s %14s %12s\n", "method", "iterations", "1 thread ms", "all ms", "error m", "error deg");
+  for (const MatchMethod m : sc.matching->methods) {
+    const auto method = m == MatchMethod::Iconic ? perception::IconicMethod::Descent : perception::IconicMethod::LevenbergMarquardt;
+    perception::IconicResult res;
+    const auto once = [&] { res = perception::registerIconic(map_i.map, map_j.image, edges, locus, method); };
+    double one = 0;
+    {
+      tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+      one = timeMedian(opt.repetitions, once);
+    }
+    const double all = timeMedian(opt.repetitions, once);
+    const perception::PoseError err = perception::poseError(T_IJ, T_i.inverse() * perception::correctedPose(res, believed));
+    std::printf("  %-10s %10d %12.1f %12.1f %14.4f %12.3f\n", matchMethodName(m), res.iterations, one * 1e3, all * 1e3,
+                err.translation_m, err.rotation_deg);
+    nlohmann::ordered_json e;
+    e["method"] = matchMethodName(m);
+    e["iterations"] = res.iterations;
+    e["ms_1t"] = one * 1e3;
+    e["ms_all"] = all * 1e3;
+    e["translation_error_m"] = err.translation_m;
+    e["rotation_error_deg"] = err.rotation_deg;
+    methods.push_back(e);
+  }
+  j_out["scenario"] = sc.name;
+  j_out["pair"] = {i, j};
+  j_out["cell_m"] = grid.cell;
+  j_out["methods"] = methods;
+  j_out["threads"] = tbb::info::default_concurrency();
+  j_out["repetitions"] = opt.repetitions;
+  if (!opt.json.empty()) writeJson(opt.json, j_out);
+  return j_out;
 }
 
 }  // namespace ambler::eval

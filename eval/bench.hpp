@@ -3,6 +3,8 @@
 #include <filesystem>
 #include <nlohmann/json.hpp>
 
+#include "eval/scenario.hpp"
+
 namespace ambler::eval {
 
 struct BenchOptions {
@@ -20,5 +22,11 @@ nlohmann::ordered_json benchScan(const BenchOptions& options);
 // is the ERIM's default sensor model (the demo's), unwrapped and edge-detected by
 // perception::scanToMap as a run's map stage does; the maps are then timed alone. Prints a table.
 nlohmann::ordered_json benchMap(const BenchOptions& options);
+
+// The matching benchmark: the scenario's first matching pair (world, scans and maps built once, as
+// a run builds them), each of its methods timed per pair on one thread and on all cores (medians),
+// with its iterations and pose error. Throws std::runtime_error if the scenario has no map or
+// matching section. Prints a table.
+nlohmann::ordered_json benchMatch(const Scenario& scenario, const BenchOptions& options);
 
 }  // namespace ambler::eval

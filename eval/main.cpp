@@ -62,6 +62,16 @@ int main(int argc, char** argv) {
   bench_map->add_option("--reps", bench_map_opt.repetitions, "Repetitions per measurement (median reported)")
       ->check(CLI::Range(1, 1000));
 
+  std::string bench_match_json, bench_match_scenario = "scenarios/demo.yaml";
+  BenchOptions bench_match_opt;
+  auto* bench_match = bench->add_subcommand("match", "Iconic matching per pair and method, ms and iterations "
+                                                     "(1 thread and all cores), on a scenario's first pair.");
+  bench_match->add_option("--scenario", bench_match_scenario, "A scenario with map and matching sections")
+      ->capture_default_str();
+  bench_match->add_option("--json", bench_match_json, "Also write the figures to this JSON file");
+  bench_match->add_option("--reps", bench_match_opt.repetitions, "Repetitions per measurement (median reported)")
+      ->check(CLI::Range(1, 1000));
+
   auto* experiment = app.add_subcommand("experiment", "Run one of the paper's experiments as sweeps; prints its "
                                                       "markdown tables (see docs/experiments/).");
   experiment->require_subcommand(1);
@@ -116,6 +126,9 @@ int main(int argc, char** argv) {
     } else if (*bench_map) {
       bench_map_opt.json = bench_map_json;
       benchMap(bench_map_opt);
+    } else if (*bench_match) {
+      bench_match_opt.json = bench_match_json;
+      benchMatch(loadScenario(bench_match_scenario), bench_match_opt);
     }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ambler: error: %s\n", e.what());
