@@ -125,7 +125,7 @@ std::vector<Eigen::Vector3d> referenceNormals(const ElevationMap& map) {
 }
 
 IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, bool with_gradient,
-                        double cauchy_c, const std::vector<Eigen::Vector3d>* reference_normals) {
+                        double cauchy_c, const std::vector<Eigen::Vector3d>* reference_normals, int stride) {
   const MapGrid& grid = map1.grid();
   const Eigen::Isometry3d T = poseFromVector(nu);
   const Eigen::Matrix3d R = T.linear();
@@ -138,7 +138,8 @@ IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, con
   tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
       RowSum& sum = rows[r];
-      for (int c = 0; c < grid.cols; ++c) {
+      if (r % stride != 0) continue;
+      for (int c = 0; c < grid.cols; c += stride) {
         if (map1.stateAt(r, c) != CellState::Known) continue;
         const Eigen::Vector2d xy = grid.center(r, c);
         const Eigen::Vector3d u(xy.x(), xy.y(), 0.0);
@@ -220,48 +221,55 @@ IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMappe
   const double c_noise = options.robust_sigmas * std::sqrt(2.0) * medianSigma(map1);
   const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
   const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
-  IconicError e = iconicError(map1, image2, res.nu, true, 0.0, &normals);
-  double c = scale(e);
-  if (c > 0) e = iconicError(map1, image2, res.nu, true, c, &normals);
-  res.rms_m.push_back(rms(e));
-  double lambda = 1e-3;
   const double half_diagonal = 0.5 * std::hypot(map1.grid().cols * map1.grid().cell, map1.grid().rows * map1.grid().cell);
-  for (; res.iterations < options.max_iterations && e.overlap > 6; ++res.iterations) {
-    if (rms(e) < options.floor_m) {
-      res.converged = true;
-      break;
-    }
-    bool stepped = false;
-    for (int tries = 0; tries < 12 && !stepped; ++tries) {
-      Matrix6d A = e.JtJ;
-      A.diagonal() += lambda * e.JtJ.diagonal();
-      const PoseVector delta = A.ldlt().solve(-0.5 * e.gradient);  // Jᵀr = ∂E/∂ν / 2 (weighted)
-      const IconicError t = iconicError(map1, image2, res.nu + delta, true, c, &normals);
-      if (t.overlap > 6 && meanSquare(t) < meanSquare(e)) {
-        const double decrease = (meanSquare(e) - meanSquare(t)) / meanSquare(e);
-        res.nu += delta, e = t, stepped = true, lambda = std::max(lambda / 10, 1e-12);
-        res.rms_m.push_back(rms(e));
-        // The step's largest motion of a line point: its translation plus its rotation at the map's
-        // half diagonal.
-        const double moved = delta.tail<3>().norm() + delta.head<3>().norm() * half_diagonal;
-        if (decrease < options.min_relative_decrease || moved < options.min_step_m) res.converged = true;
-        // The loss narrows with the residuals; the cost at the new scale is evaluated afresh.
-        const double c_next = scale(e);
-        if (c_next < c) {
-          c = c_next;
-          e = iconicError(map1, image2, res.nu, true, c, &normals);
-          res.converged = false;  // a narrower loss can still move the estimate
-          if (moved < options.min_step_m && c == c_noise) res.converged = true;
+  const std::vector<int> strides = options.strides.empty() ? std::vector<int>{1} : options.strides;
+  for (std::size_t level = 0; level < strides.size(); ++level) {
+    const int stride = std::max(1, strides[level]);
+    const auto eval = [&](const PoseVector& nu, double c) { return iconicError(map1, image2, nu, true, c, &normals, stride); };
+    IconicError e = eval(res.nu, 0.0);
+    double c = scale(e);
+    if (c > 0) e = eval(res.nu, c);
+    if (level == 0) res.rms_m.push_back(rms(e));
+    double lambda = 1e-3;
+    bool converged = false;
+    for (; res.iterations < options.max_iterations && e.overlap > 6;) {
+      ++res.iterations;
+      if (rms(e) < options.floor_m) {
+        converged = true;
+        break;
+      }
+      bool stepped = false;
+      for (int tries = 0; tries < 12 && !stepped; ++tries) {
+        Matrix6d A = e.JtJ;
+        A.diagonal() += lambda * e.JtJ.diagonal();
+        const PoseVector delta = A.ldlt().solve(-0.5 * e.gradient);  // Jᵀr = ∂E/∂ν / 2 (weighted)
+        const IconicError t = eval(res.nu + delta, c);
+        if (t.overlap > 6 && meanSquare(t) < meanSquare(e)) {
+          const double decrease = (meanSquare(e) - meanSquare(t)) / meanSquare(e);
+          res.nu += delta, e = t, stepped = true, lambda = std::max(lambda / 10, 1e-12);
+          res.rms_m.push_back(rms(e));
+          // The step's largest motion of a line point: its translation plus its rotation at the
+          // map's half diagonal.
+          const double moved = delta.tail<3>().norm() + delta.head<3>().norm() * half_diagonal;
+          converged = decrease < options.min_relative_decrease || moved < options.min_step_m;
+          // The loss narrows with the residuals; the cost at the new scale is evaluated afresh, and
+          // a narrower loss can still move the estimate.
+          const double c_next = scale(e);
+          if (c_next < c) {
+            c = c_next;
+            e = eval(res.nu, c);
+            converged = moved < options.min_step_m && c == c_noise;
+          }
+        } else {
+          lambda *= 10;
         }
-      } else {
-        lambda *= 10;
+      }
+      if (!stepped || converged) {
+        converged = true;
+        break;
       }
     }
-    if (!stepped || res.converged) {
-      res.converged = true;
-      ++res.iterations;
-      break;
-    }
+    res.converged = converged;
   }
   finishResult(res, map1, image2);
   return res;

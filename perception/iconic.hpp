@@ -40,7 +40,7 @@ struct IconicError {
 // image (Gauss-Newton's point-to-plane form). E is unchanged; the gradient is then approximate.
 IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
                         bool with_gradient = true, double cauchy_c = 0,
-                        const std::vector<Eigen::Vector3d>* reference_normals = nullptr);
+                        const std::vector<Eigen::Vector3d>* reference_normals = nullptr, int stride = 1);
 
 // Map 1's unit surface normals (row-major per cell; NaN where the cell or its neighbours are not
 // known, and there image 2's normal at the hit is used): from central differences of the known
@@ -56,6 +56,9 @@ struct IconicOptions {
   // σ_z of map 1 (at least 1 mm): it starts as wide as the misalignment (the first steps are plain
   // least squares) and narrows to the noise of a difference of two maps. 0: plain least squares.
   double robust_sigmas = 3.0;
+  // LM: coarse to fine, the lines of every stride-th cell in each direction first (4: 40 cm lines on
+  // a 10 cm map), each level started from the one before; the last stride should be 1.
+  std::vector<int> strides{4, 2, 1};
 };
 
 struct IconicResult {
