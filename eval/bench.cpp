@@ -291,7 +291,7 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
   perception::ScanMap map_j = perception::scanToMap(scanner.scan(T_j, viewSeed(sc.seed, j)).image, sc.sensor, T_j, grid, config);
   // Image J at the pose the rover believes, as the match stage hands it over.
   const Eigen::Isometry3d T_IJ = T_i.inverse() * T_j;
-  const Eigen::Isometry3d T_0 = T_IJ * perception::sensorPose(sc.matching->initial_error.xyz_m, sc.matching->initial_error.rpy_rad);
+  const Eigen::Isometry3d T_0 = sc.matching->initialEstimate(T_IJ);
   const Eigen::Isometry3d believed = T_i * T_0;
   map_j.image.T_WS = believed;
   perception::LocusConfig locus = config.locus;
@@ -303,7 +303,7 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
               grid.rows, grid.cols, grid.cell, opt.repetitions);
   std::printf("  %-10s %10s %12s %12s %14s %12s\n", "method", "iterations", "1 thread ms", "all ms", "error m", "error deg");
   for (const MatchMethod m : sc.matching->methods) {
-    const auto method = m == MatchMethod::Iconic ? perception::IconicMethod::Descent : perception::IconicMethod::LevenbergMarquardt;
+    const auto method = iconicMethod(m);
     perception::IconicResult res;
     const auto once = [&] { res = perception::registerIconic(map_i.map, map_j.image, edges, locus, method); };
     double one = 0;

@@ -3,6 +3,7 @@
 // typed value reader is scenario_reader.hpp/.cpp; the resolved form (every default written out,
 // numbers that read back bit for bit) is scenario_writer.cpp.
 #include "eval/scenario.hpp"
+#include "perception/sensor_geometry.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -320,6 +321,13 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
 const char* shadowsName(perception::ShadowMethod m) { return m == perception::ShadowMethod::Gnc ? "gnc" : "none"; }
 const char* baselineName(Baseline b) { return b == Baseline::Cartesian ? "cartesian" : "none"; }
 const char* matchMethodName(MatchMethod m) { return m == MatchMethod::Iconic ? "iconic" : "iconic_lm"; }
+perception::IconicMethod iconicMethod(MatchMethod m) {
+  return m == MatchMethod::Iconic ? perception::IconicMethod::Descent : perception::IconicMethod::LevenbergMarquardt;
+}
+
+Eigen::Isometry3d MatchingSpec::initialEstimate(const Eigen::Isometry3d& T_IJ) const {
+  return T_IJ * perception::sensorPose(initial_error.xyz_m, initial_error.rpy_rad);
+}
 
 perception::MapGrid MapSpec::grid() const {
   return perception::MapGrid::covering(x_m[0], x_m[1], y_m[0], y_m[1], cell_m);

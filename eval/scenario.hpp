@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "perception/iconic.hpp"
 #include "perception/map_grid.hpp"
 #include "perception/scan_to_map.hpp"
 #include "perception/sensor_model.hpp"
@@ -54,12 +55,19 @@ struct MapSpec {
 enum class MatchMethod : std::uint8_t { Iconic, IconicLm };
 const char* matchMethodName(MatchMethod m);
 
+// The library's algorithm for a method.
+perception::IconicMethod iconicMethod(MatchMethod m);
+
 struct MatchingSpec {
   std::vector<std::pair<int, int>> pairs;  // (I, J): view J registered against view I
   std::vector<MatchMethod> methods{MatchMethod::IconicLm};
   ViewSpec initial_error;                  // the rover's dead-reckoning error E: T_0 = T_IJ·E
   double success_translation_m = 0.05;
   double success_rotation_deg = 0.5;
+
+  // What the rover believes of sensor J's pose in sensor I's frame, given the truth T_IJ:
+  // T_0 = T_IJ·E.
+  Eigen::Isometry3d initialEstimate(const Eigen::Isometry3d& T_IJ) const;
 };
 
 struct Scenario {

@@ -18,9 +18,10 @@ void run(RunState& s) {
   const perception::ScanToMapConfig config = spec.scanToMapConfig();
   std::filesystem::create_directories(s.out / "maps");
   s.metrics["map"] = nlohmann::ordered_json::array();
+  const perception::ElevationMap truth = s.truth->elevation(grid);  // the same grid for every view
   for (int k = 0; k < int(s.views.size()); ++k) {
     ViewState& view = s.views[k];
-    view.truth = s.truth->elevation(grid);
+    view.truth = truth;
     view.visibility = s.truth->visibility(*view.truth, view.T_WS, sc.sensor);
     Stopwatch t;
     view.locus = perception::scanToMap(view.scan->image, sc.sensor, view.T_WS, grid, config);

@@ -32,12 +32,11 @@ void run(RunState& s) {
   const MatchingSpec& spec = *sc.matching;
   std::filesystem::create_directories(s.out / "matching");
   s.metrics["registration"] = nlohmann::ordered_json::array();
-  const Eigen::Isometry3d E = perception::sensorPose(spec.initial_error.xyz_m, spec.initial_error.rpy_rad);
   for (const auto& [i, j] : spec.pairs) {
     const ViewState& vi = s.views[i];
     const ViewState& vj = s.views[j];
     const Eigen::Isometry3d T_IJ = vi.T_WS.inverse() * vj.T_WS;  // the truth, for scoring only
-    const Eigen::Isometry3d T_0 = T_IJ * E;                       // what the rover believes
+    const Eigen::Isometry3d T_0 = spec.initialEstimate(T_IJ);     // what the rover believes
     const Eigen::Isometry3d believed_WS = vi.T_WS * T_0;          // sensor J in the believed world
     // Image J as the rover has it: unwrapped, its edges, at the believed pose.
     perception::RangeImage image = vj.locus->image;
@@ -48,8 +47,7 @@ void run(RunState& s) {
     for (const MatchMethod method : spec.methods) {
       Stopwatch t;
       const perception::IconicResult res = perception::registerIconic(
-          map_i, image, vj.locus->edges ? &*vj.locus->edges : nullptr, config,
-          method == MatchMethod::Iconic ? perception::IconicMethod::Descent : perception::IconicMethod::LevenbergMarquardt);
+          map_i, image, vj.locus->edges ? &*vj.locus->edges : nullptr, config, iconicMethod(method));
       const double seconds = t.seconds();
       s.addTime("match", seconds);
       const Eigen::Isometry3d T_est = vi.T_WS.inverse() * perception::correctedPose(res, believed_WS);
