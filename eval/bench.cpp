@@ -294,26 +294,25 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
   const Eigen::Isometry3d T_0 = sc.matching->initialEstimate(T_IJ);
   const Eigen::Isometry3d believed = T_i * T_0;
   map_j.image.T_WS = believed;
-  perception::LocusConfig locus = config.locus;
-  locus.sensor = sc.sensor;
+  const perception::RegistrationConfig reg_config = registrationConfig(sc);
+  const perception::MapGrid grid_j = perception::believedGrid(grid, T_i, believed);
   const auto* edges = map_j.edges ? &*map_j.edges : nullptr;
 
   nlohmann::ordered_json j_out, methods = nlohmann::ordered_json::array();
   std::printf("ambler bench match (%s, views %d-%d, %dx%d cells of %.2f m; medians of %d)\n", sc.name.c_str(), i, j,
               grid.rows, grid.cols, grid.cell, opt.repetitions);
-  std::printf("  %-10s %10s %12s %12s %14s %12s\n", "method", "iterations", "1 thread ms", "all ms", "error m", "error deg");
+  std::printf("  %-15s %10s %12s %12s %14s %12s\n", "method", "iterations", "1 thread ms", "all ms", "error m", "error deg");
   for (const MatchMethod m : sc.matching->methods) {
-    const auto method = iconicMethod(m);
-    perception::IconicResult res;
-    const auto once = [&] { res = perception::registerIconic(map_i.map, map_j.image, edges, locus, method); };
+    perception::RegistrationResult res;
+    const auto once = [&] { res = perception::registerViews(map_i.map, map_j.image, edges, grid_j, m, reg_config); };
     double one = 0;
     {
       tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
       one = timeMedian(opt.repetitions, once);
     }
     const double all = timeMedian(opt.repetitions, once);
-    const perception::PoseError err = perception::poseError(T_IJ, T_i.inverse() * perception::correctedPose(res, believed));
-    std::printf("  %-10s %10d %12.1f %12.1f %14.4f %12.3f\n", matchMethodName(m), res.iterations, one * 1e3, all * 1e3,
+    const perception::PoseError err = perception::poseError(T_IJ, T_i.inverse() * perception::poseFromVector(res.nu).inverse() * believed);
+    std::printf("  %-15s %10d %12.1f %12.1f %14.4f %12.3f\n", matchMethodName(m), res.iterations, one * 1e3, all * 1e3,
                 err.translation_m, err.rotation_deg);
     nlohmann::ordered_json e;
     e["method"] = matchMethodName(m);

@@ -22,6 +22,10 @@
 namespace ambler::eval {
 namespace {
 
+// The bounds of matching.initial_error (each coordinate, each angle): also the rover's prior.
+constexpr double kMaxInitialTranslationM = 3.0;
+constexpr double kMaxInitialRotationDeg = 30.0;
+
 namespace fs = std::filesystem;
 using terrains::TerrainKind;
 using namespace scenario_detail;
@@ -267,16 +271,18 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
       const std::string path = "matching.methods[" + std::to_string(i) + "]";
       const std::string_view name = reader.choice((*ms)[i], path, {"iconic", "iconic_lm", "features", "features+iconic",
                                                                    "iconic_weighted", "icp_point_to_plane", "gicp", "fgr"});
-      if (name == "iconic") m.methods.push_back(MatchMethod::Iconic);
+      if (name == "features") m.methods.push_back(MatchMethod::Features);
+      else if (name == "iconic") m.methods.push_back(MatchMethod::Iconic);
+      else if (name == "features+iconic") m.methods.push_back(MatchMethod::FeaturesIconic);
       else if (name == "iconic_lm") m.methods.push_back(MatchMethod::IconicLm);
-      else reader.fail(path, std::string(name) + " is not built yet (built: iconic, iconic_lm)");
+      else reader.fail(path, std::string(name) + " is not built yet (built: features, iconic, features+iconic, iconic_lm)");
     }
   }
   if (const auto e = f.get("initial_error")) {
     const Fields fe(reader, *e, "matching.initial_error", {"xyz_m", "rpy_deg"});
-    if (const auto xyz = fe.numbers<3>("xyz_m", {-3.0, 3.0, false, false}))
+    if (const auto xyz = fe.numbers<3>("xyz_m", {-kMaxInitialTranslationM, kMaxInitialTranslationM, false, false}))
       m.initial_error.xyz_m = {(*xyz)[0], (*xyz)[1], (*xyz)[2]};
-    if (const auto rpy = fe.numbers<3>("rpy_deg", {-30.0, 30.0, false, false}))
+    if (const auto rpy = fe.numbers<3>("rpy_deg", {-kMaxInitialRotationDeg, kMaxInitialRotationDeg, false, false}))
       m.initial_error.rpy_rad = {degToRad((*rpy)[0]), degToRad((*rpy)[1]), degToRad((*rpy)[2])};
   }
   if (const auto s = f.get("success")) {
@@ -320,9 +326,20 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
 
 const char* shadowsName(perception::ShadowMethod m) { return m == perception::ShadowMethod::Gnc ? "gnc" : "none"; }
 const char* baselineName(Baseline b) { return b == Baseline::Cartesian ? "cartesian" : "none"; }
-const char* matchMethodName(MatchMethod m) { return m == MatchMethod::Iconic ? "iconic" : "iconic_lm"; }
-perception::IconicMethod iconicMethod(MatchMethod m) {
-  return m == MatchMethod::Iconic ? perception::IconicMethod::Descent : perception::IconicMethod::LevenbergMarquardt;
+const char* matchMethodName(MatchMethod m) {
+  switch (m) {
+    case MatchMethod::Features: return "features";
+    case MatchMethod::Iconic: return "iconic";
+    case MatchMethod::FeaturesIconic: return "features+iconic";
+    case MatchMethod::IconicLm: return "iconic_lm";
+    case MatchMethod::IconicWeighted: return "iconic_weighted";
+  }
+  return "?";
+}
+std::string matchMethodFileName(MatchMethod m) {
+  std::string name = matchMethodName(m);
+  std::replace(name.begin(), name.end(), '+', '_');
+  return name;
 }
 
 Eigen::Isometry3d MatchingSpec::initialEstimate(const Eigen::Isometry3d& T_IJ) const {
@@ -337,6 +354,15 @@ perception::ScanToMapConfig MapSpec::scanToMapConfig() const {
   perception::ScanToMapConfig c;
   c.shadows = shadows;
   c.locus.epsilon_rad = epsilon_rad;
+  return c;
+}
+
+perception::RegistrationConfig registrationConfig(const Scenario& sc) {
+  perception::RegistrationConfig c;
+  c.locus = sc.map->scanToMapConfig().locus;
+  c.locus.sensor = sc.sensor;
+  c.prior_translation_m = std::sqrt(3.0) * kMaxInitialTranslationM;
+  c.prior_rotation_deg = kMaxInitialRotationDeg;
   return c;
 }
 

@@ -10,7 +10,7 @@
 #include <string_view>
 #include <vector>
 
-#include "perception/iconic.hpp"
+#include "perception/registration.hpp"
 #include "perception/map_grid.hpp"
 #include "perception/scan_to_map.hpp"
 #include "perception/sensor_model.hpp"
@@ -50,13 +50,12 @@ struct MapSpec {
   perception::ScanToMapConfig scanToMapConfig() const;
 };
 
-// The registration methods a `matching:` section may name (docs/scenario.md, "matching"):
-// the paper's gradient descent and Levenberg-Marquardt on the same residuals.
-enum class MatchMethod : std::uint8_t { Iconic, IconicLm };
+// The registration methods a `matching:` section may name (docs/scenario.md, "matching").
+using MatchMethod = perception::RegistrationMethod;
+// The scenario's name of a method ("features+iconic"), and the form a file name takes
+// ("features_iconic").
 const char* matchMethodName(MatchMethod m);
-
-// The library's algorithm for a method.
-perception::IconicMethod iconicMethod(MatchMethod m);
+std::string matchMethodFileName(MatchMethod m);
 
 struct MatchingSpec {
   std::vector<std::pair<int, int>> pairs;  // (I, J): view J registered against view I
@@ -81,6 +80,11 @@ struct Scenario {
   std::optional<MapSpec> map;       // absent: no maps
   std::optional<MatchingSpec> matching;  // absent: no registration
 };
+
+// What the matchers are told (docs/matching.md): the locus settings and sensor model of the map
+// section, and the rover's prior on its dead-reckoning error, the bounds of the initial_error key
+// (|x|, |y|, |z| ≤ 3 m, each angle ≤ 30°), not the error itself.
+perception::RegistrationConfig registrationConfig(const Scenario& sc);
 
 // Loads and validates a scenario. Throws ScenarioError naming the file and the key for a missing
 // file, bad YAML, an unknown key, a wrong type or an out-of-range value.

@@ -83,11 +83,13 @@ struct Penalty {
   }
 };
 
-// The noise of u = 1/ρ: σ_u = σ_ρ/ρ² = √(k² + σ_q²·u⁴), with σ_ρ² = (k·ρ²)² + σ_q² the sensor
-// model's (SensorModel::rangeVariance) in single precision.
+// The noise of u = 1/ρ: σ_u = σ/ρ² = √(k² + (σ_q² + σ_s²)·u⁴), with σ_ρ² = (k·ρ²)² + σ_q² the
+// sensor model's (SensorModel::rangeVariance) and σ_s the surface's own departure from the
+// membrane's local trend (GncConfig::surface_sigma_m), in single precision.
 struct NoiseU {
   float sq, k;
-  explicit NoiseU(const SensorModel& s) : sq(float(std::sqrt(s.quantizationVariance()))), k(float(s.noise_k)) {}
+  NoiseU(const SensorModel& s, double surface_sigma_m)
+      : sq(float(std::sqrt(s.quantizationVariance() + surface_sigma_m * surface_sigma_m))), k(float(s.noise_k)) {}
   float variance(float u) const {
     const float q = sq * u * u;
     return k * k + q * q;
@@ -228,6 +230,8 @@ void requireConfig(bool ok, const char* what) {
 Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& config) {
   requireConfig(config.lambda > 0 && std::isfinite(config.lambda), "lambda must be positive");
   requireConfig(config.h0 > 0 && std::isfinite(config.h0), "h0 must be positive");
+  requireConfig(config.surface_sigma_m >= 0 && std::isfinite(config.surface_sigma_m),
+                "surface_sigma_m must be non-negative");
   requireConfig(config.sweeps >= 1, "sweeps must be at least 1");
   requireConfig(config.sensor.noise_k >= 0 && config.sensor.quantization_m >= 0,
                 "sensor noise_k and quantization_m must be non-negative");
@@ -252,7 +256,7 @@ Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& 
   // The membrane's data and links. σ_u (NoiseU) is the noise of u, so the data term is weighted
   // by 1/σ_u² and a link's k is 2/(σ_u,i + σ_u,j).
   Membrane m(rows, cols);
-  const NoiseU noise(config.sensor);
+  const NoiseU noise(config.sensor, config.surface_sigma_m);
   for (int k = 0; k < Membrane::kArrays; ++k)
     m.storeRow(Membrane::Array(k), -1, nullptr), m.storeRow(Membrane::Array(k), rows, nullptr);
   forRows(rows, pixels, [&](int r0, int r1) {

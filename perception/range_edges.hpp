@@ -19,6 +19,10 @@ struct GncConfig {
   double lambda = 1.0;  // membrane scale, pixels
   double h0 = 6.0;      // contrast threshold (σ units): the smallest jump beyond the trend to break
   int sweeps = 3;       // red-black SOR sweeps at each step of the p-sequence 1, 1/2, … 1/(2λ)
+  // The surface's own departure from the local trend between neighbouring pixels (rough ground
+  // is not linear in 1/ρ from pixel to pixel), m: added to σ_ρ in quadrature, so that a
+  // noise-free sensor does not break links at every pebble (docs/range_edges.md).
+  double surface_sigma_m = 0.02;
 };
 
 // The edges of `image`: 1 where a pixel touches a depth discontinuity (both pixels either side of

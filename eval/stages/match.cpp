@@ -9,7 +9,7 @@
 
 #include "eval/io.hpp"
 #include "eval/stages.hpp"
-#include "perception/iconic.hpp"
+#include "perception/registration.hpp"
 #include "perception/rigid_transform.hpp"
 #include "perception/sensor_geometry.hpp"
 
@@ -27,6 +27,26 @@ nlohmann::ordered_json matrixJson(const Eigen::MatrixXd& m) {
   return rows;
 }
 
+// A map's features (docs/matching.md), in its map frame.
+nlohmann::ordered_json featuresJson(const std::vector<perception::Feature>& features) {
+  static const char* kTypes[] = {"point", "line", "region"};
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (const perception::Feature& f : features) {
+    nlohmann::ordered_json e;
+    e["type"] = kTypes[int(f.type)];
+    e["position_m"] = {f.position.x(), f.position.y(), f.position.z()};
+    if (f.type == perception::FeatureType::Line) {
+      e["direction"] = {f.direction.x(), f.direction.y(), f.direction.z()};
+      e["length_m"] = f.length_m;
+    }
+    e["extent_m"] = f.extent_m;
+    e["strength_per_m"] = f.strength;
+    e["cells"] = f.cells;
+    out.push_back(e);
+  }
+  return out;
+}
+
 void run(RunState& s) {
   const Scenario& sc = s.scenario;
   const MatchingSpec& spec = *sc.matching;
@@ -41,16 +61,17 @@ void run(RunState& s) {
     // Image J as the rover has it: unwrapped, its edges, at the believed pose.
     perception::RangeImage image = vj.locus->image;
     image.T_WS = believed_WS;
-    perception::LocusConfig config = sc.map->scanToMapConfig().locus;
-    config.sensor = sc.sensor;
+    const perception::RegistrationConfig config = registrationConfig(sc);
     const perception::ElevationMap& map_i = vi.locus->map;
+    const perception::MapGrid grid_j = perception::believedGrid(map_i.grid(), vi.T_WS, believed_WS);
     for (const MatchMethod method : spec.methods) {
       Stopwatch t;
-      const perception::IconicResult res = perception::registerIconic(
-          map_i, image, vj.locus->edges ? &*vj.locus->edges : nullptr, config, iconicMethod(method));
+      const perception::RegistrationResult reg = perception::registerViews(
+          map_i, image, vj.locus->edges ? &*vj.locus->edges : nullptr, grid_j, method, config);
+      const perception::IconicResult& res = reg.iconic;
       const double seconds = t.seconds();
       s.addTime("match", seconds);
-      const Eigen::Isometry3d T_est = vi.T_WS.inverse() * perception::correctedPose(res, believed_WS);
+      const Eigen::Isometry3d T_est = vi.T_WS.inverse() * perception::poseFromVector(reg.nu).inverse() * believed_WS;
       const perception::PoseError err = perception::poseError(T_IJ, T_est), start = perception::poseError(T_IJ, T_0);
       const bool success = err.translation_m <= spec.success_translation_m && err.rotation_deg <= spec.success_rotation_deg;
       const std::string name = matchMethodName(method);
@@ -63,31 +84,57 @@ void run(RunState& s) {
       pair["translation_error_m"] = err.translation_m;
       pair["rotation_error_deg"] = err.rotation_deg;
       pair["success"] = success;
-      pair["iterations"] = res.iterations;
+      pair["iterations"] = reg.iterations;
       pair["time_s"] = seconds;
-      // Of ν (world → believed world), rx ry rz tx ty tz; null where a direction is free.
-      pair["covariance"] = res.degenerate ? nlohmann::ordered_json(nullptr) : matrixJson(res.covariance);
-      pair["degenerate"] = res.degenerate;
+      // Of ν (world → believed world), rx ry rz tx ty tz; null where a direction is free or the
+      // method gives none (features alone).
+      const bool covariance = reg.ran_iconic && !res.degenerate;
+      pair["covariance"] = covariance ? matrixJson(res.covariance) : nlohmann::ordered_json(nullptr);
+      pair["degenerate"] = reg.ran_iconic && res.degenerate;
       pair["free_directions"] = res.free_directions;
       pair["overlap"] = res.overlap;
+      if (reg.feature_match) {
+        const perception::FeatureMatch& fm = *reg.feature_match;
+        nlohmann::ordered_json f;
+        f["features_i"] = featuresJson(reg.features_i);
+        f["features_j"] = featuresJson(reg.features_j);
+        f["T_WM_j"] = matrixJson(grid_j.T_WM.matrix());
+        f["found"] = fm.found;
+        f["D_m"] = fm.D;
+        f["D_initial_m"] = fm.D0;
+        // Scoring only: eq. 3 at the true transform (world → believed world), and its pairing:
+        // whether a failure is the search's or the verification's.
+        std::vector<std::pair<int, int>> true_pairs;
+        f["D_true_m"] = perception::featureDistanceSum(reg.features_i, reg.features_j, *reg.map_j,
+                                                       grid_j.T_WM.inverse() * believed_WS * vj.T_WS.inverse(),
+                                                       config.match, &true_pairs);
+        f["pairs_true"] = true_pairs.size();
+        nlohmann::ordered_json pairs = nlohmann::ordered_json::array();
+        for (const auto& [a, b] : fm.pairs) pairs.push_back({a, b});
+        f["pairs"] = pairs;
+        f["nodes"] = fm.nodes;
+        f["hypotheses"] = fm.hypotheses;
+        f["exhausted"] = fm.exhausted;
+        pair["feature_matching"] = f;
+      }
       nlohmann::ordered_json trace = nlohmann::ordered_json::array();
       for (std::size_t k = 0; k < res.rms_m.size(); ++k) trace.push_back({{"iteration", k}, {"rms_m", res.rms_m[k]}});
       pair["trace"] = trace;
-      writeJson(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + name + ".json"), pair);
+      writeJson(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + matchMethodFileName(method) + ".json"), pair);
       nlohmann::ordered_json m;
       m["pair"] = {i, j};
       m["method"] = name;
       m["translation_error_m"] = err.translation_m;
       m["rotation_error_deg"] = err.rotation_deg;
       m["success"] = success;
-      m["iterations"] = res.iterations;
+      m["iterations"] = reg.iterations;
       m["time_s"] = seconds;
       m["initial_translation_error_m"] = start.translation_m;
       m["initial_rotation_error_deg"] = start.rotation_deg;
       s.metrics["registration"].push_back(m);
       char line[200];
-      std::snprintf(line, sizeof line, "match     views %d-%d %-10s %3d iterations: error %.4f m %.3f deg (from %.3f m %.2f deg)%s",
-                    i, j, name.c_str(), res.iterations, err.translation_m, err.rotation_deg, start.translation_m,
+      std::snprintf(line, sizeof line, "match     views %d-%d %-15s %3d iterations: error %.4f m %.3f deg (from %.3f m %.2f deg)%s",
+                    i, j, name.c_str(), reg.iterations, err.translation_m, err.rotation_deg, start.translation_m,
                     start.rotation_deg, success ? "" : "  FAILED");
       s.say(line);
     }

@@ -1,0 +1,63 @@
+#pragma once
+// Registering view J against view I by any of the matching methods (paper §4; docs/matching.md):
+// feature matching alone, the paper's iconic descent (from T_0, or from feature matching's T_F),
+// Levenberg–Marquardt, and its uncertainty-weighted form. What the match stage, `ambler bench
+// match` and the experiments call. Onboard code: image J carries the pose the rover believes.
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "perception/feature_matching.hpp"
+#include "perception/features.hpp"
+#include "perception/iconic.hpp"
+
+namespace ambler::perception {
+
+enum class RegistrationMethod : std::uint8_t {
+  Features,        // feature matching alone: T_F
+  Iconic,          // the paper's gradient descent (eq. 4) from T_0
+  FeaturesIconic,  // the paper's two stages: the descent from T_F
+  IconicLm,        // Levenberg–Marquardt, robust, coarse to fine, from T_0
+  IconicWeighted,  // the same with residuals weighted by 1/(σ₁² + σ₂²)
+};
+
+struct RegistrationConfig {
+  LocusConfig locus;          // how image J is met (its sensor model included)
+  FeatureConfig features;     // feature extraction, both maps
+  FeatureMatchConfig match;   // predict, verify, search; its max_shift_m is set by registerViews
+  // The rover's prior on its dead-reckoning error: translation (m) and rotation (degrees) at most
+  // these. A feature at distance d from sensor J moves by at most prior_translation_m +
+  // 2·sin(prior_rotation/2)·d between T_0 and the truth (the max_shift_m given to matchFeatures,
+  // d the farthest corner of map I's grid); the rotation bounds match.max_rotation_deg.
+  double prior_translation_m = 5.2;
+  double prior_rotation_deg = 30;
+  IconicOptions iconic;
+};
+
+struct RegistrationResult {
+  PoseVector nu = PoseVector::Zero();  // map I's frame → the believed frame of image J
+  int iterations = 0;                  // iconic iterations (0 for features alone)
+  IconicResult iconic;                 // the iconic stage's result (iterations, trace, covariance), if it ran
+  bool ran_iconic = false;
+  // Feature matching, when it ran: both maps' features (each in its map's frame), map J itself
+  // (on grid_j), and the match; its ν maps map I's frame to map J's, T_WM_J⁻¹·exp(ν) here.
+  std::vector<Feature> features_i, features_j;
+  std::optional<ElevationMap> map_j;
+  std::optional<FeatureMatch> feature_match;
+};
+
+// The grid of the rover's map of view J: map I's grid carried from sensor I to where the rover
+// believes sensor J is (T_WM_J = believed_WS_J·T_WS_I⁻¹, kept gravity-aligned: its yaw and
+// translation), so that map J covers what sensor J sees as map I covers what sensor I sees.
+MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, const Eigen::Isometry3d& believed_WS_j);
+
+// Registers range image J (at the believed pose, with its edge mask or null) against map I. The
+// estimate ν maps map I's frame to the frame image J's believed pose lives in; the corrected pose
+// of sensor J is poseFromVector(ν)⁻¹·believed. Feature matching builds map J on grid_j (in the
+// believed world; see believedGrid). Map I must be in the world frame (its grid's T_WM the
+// identity). Throws std::invalid_argument otherwise.
+RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& image_j,
+                                 const Raster<std::uint8_t>* edges_j, const MapGrid& grid_j,
+                                 RegistrationMethod method, const RegistrationConfig& config);
+
+}  // namespace ambler::perception
