@@ -86,14 +86,19 @@ void tint(cv::Mat& img, cv::Point p, int radius, const cv::Scalar& colour) {
   tinted.copyTo(img, mask);
 }
 
+// What of a feature to draw: its body (ring, segment, disc), its centre dot (points and regions), or both.
+enum class Part { Body, Dot, Both };
+
 // Draws `f` in `colour`: a point as a ring of its extent with a centre dot, a line as a segment
 // of its length through its position (the horizontal part of its axis), a region as a tinted disc
 // of its extent with a ring and a centre dot.
-void drawFeature(cv::Mat& img, const MapView& v, const Feature& f, const cv::Scalar& colour) {
+void drawFeature(cv::Mat& img, const MapView& v, const Feature& f, const cv::Scalar& colour, Part part) {
   if (!f.position.allFinite()) return;
   const cv::Point p = v.at(f.position.x(), f.position.y());
+  const bool body = part != Part::Dot, centre = part != Part::Body;
   switch (f.type) {
     case FeatureType::Line: {
+      if (!body) break;
       const Eigen::Vector2d h = f.direction.allFinite() && std::isfinite(f.length_m)
                                     ? Eigen::Vector2d(0.5 * f.length_m * f.direction.head<2>())
                                     : Eigen::Vector2d::Zero();
@@ -102,23 +107,23 @@ void drawFeature(cv::Mat& img, const MapView& v, const Feature& f, const cv::Sca
       break;
     }
     case FeatureType::Region:
-      tint(img, p, v.radius(f.extent_m), colour);
-      ring(img, p, v.radius(f.extent_m), colour);
-      dot(img, p, colour);
+      if (body) tint(img, p, v.radius(f.extent_m), colour), ring(img, p, v.radius(f.extent_m), colour);
+      if (centre) dot(img, p, colour);
       break;
     case FeatureType::Point:
-      ring(img, p, v.radius(f.extent_m), colour);
-      dot(img, p, colour);
+      if (body) ring(img, p, v.radius(f.extent_m), colour);
+      if (centre) dot(img, p, colour);
       break;
   }
 }
 
-// Regions first, then lines, then points, so that small marks stay on top of large ones.
-void drawFeatures(cv::Mat& img, const MapView& v, const std::vector<Feature>& features,
+// Regions first, then lines, then points, so that small marks stay on top of large ones; in
+// featureColour, or in `colour` if given.
+void drawFeatures(cv::Mat& img, const MapView& v, const std::vector<Feature>& features, Part part,
                   const cv::Scalar* colour = nullptr) {
   for (FeatureType type : {FeatureType::Region, FeatureType::Line, FeatureType::Point})
     for (const Feature& f : features)
-      if (f.type == type) drawFeature(img, v, f, colour ? *colour : featureColour(type));
+      if (f.type == type) drawFeature(img, v, f, colour ? *colour : featureColour(type), part);
 }
 
 enum class Glyph { Ring, Segment, Disc, Box };
@@ -218,7 +223,7 @@ cv::Scalar featureColour(FeatureType type) {
 
 cv::Mat featuresPicture(const ElevationMap& map, const std::vector<Feature>& features, const std::string& title) {
   MapView v(map);
-  drawFeatures(v.picture, v, features);
+  drawFeatures(v.picture, v, features, Part::Both);
   long n[3] = {0, 0, 0};
   for (const Feature& f : features) ++n[int(f.type)];
   const cv::Mat framed = framePicture(v.picture, title + ": " + std::to_string(features.size()) + " features",
@@ -237,15 +242,18 @@ cv::Mat correspondencePicture(const ElevationMap& map_i, const std::vector<Featu
       throw std::invalid_argument("correspondencePicture: pair (" + std::to_string(a) + ", " + std::to_string(b) +
                                   ") is out of range");
   MapView v(map_i);
-  // The lines under the features, so that every feature shows whole; a pair in agreement hides its line.
+  // The lines over the features' rings, segments and discs (pairs closer than a ring's radius
+  // would hide under them), the centre dots over the lines.
+  drawFeatures(v.picture, v, features_i, Part::Body, &kFeaturesIColour);
+  drawFeatures(v.picture, v, features_j, Part::Body, &kFeaturesJColour);
   for (const auto& [a, b] : pairs) {
     const Eigen::Vector3d& p = features_i[std::size_t(a)].position;
     const Eigen::Vector3d& q = features_j[std::size_t(b)].position;
     if (p.allFinite() && q.allFinite())
       segment(v.picture, v.at(p.x(), p.y()), v.at(q.x(), q.y()), kCorrespondenceColour, 2);
   }
-  drawFeatures(v.picture, v, features_i, &kFeaturesIColour);
-  drawFeatures(v.picture, v, features_j, &kFeaturesJColour);
+  drawFeatures(v.picture, v, features_i, Part::Dot, &kFeaturesIColour);
+  drawFeatures(v.picture, v, features_j, Part::Dot, &kFeaturesJColour);
   const cv::Mat framed =
       framePicture(v.picture, title, colourRamp(cv::COLORMAP_VIRIDIS), v.relief.lo, v.relief.hi, "m");
   const auto n = [](std::size_t k) { return std::to_string(k); };

@@ -30,9 +30,10 @@ cv::Mat featuresPicture(const perception::ElevationMap& map, const std::vector<p
                         const std::string& title);
 
 // Fig. 5: map I's relief with its features in kFeaturesIColour, map J's features (already moved
-// into map I's frame by the estimate, by the caller) in kFeaturesJColour, over a line in
+// into map I's frame by the estimate, by the caller) in kFeaturesJColour, and a line in
 // kCorrespondenceColour from the first to the second feature of each pair (indices into
-// features_i, features_j). Throws std::invalid_argument for an index out of range.
+// features_i, features_j), drawn over the features but under their centre dots. Throws
+// std::invalid_argument for an index out of range.
 cv::Mat correspondencePicture(const perception::ElevationMap& map_i,
                               const std::vector<perception::Feature>& features_i,
                               const std::vector<perception::Feature>& features_j,

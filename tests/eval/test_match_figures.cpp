@@ -148,7 +148,8 @@ TEST(CorrespondencePicture, MapIsFeaturesMapJsFeaturesAndALineJoiningEachPair) {
   const cv::Vec3b ci = bgr(kFeaturesIColour), cj = bgr(kFeaturesJColour), pair = bgr(kCorrespondenceColour);
   EXPECT_EQ(L.at(pic, -0.45, 1.45), ci);
   EXPECT_EQ(L.at(pic, 1.55, 0.35), ci);
-  EXPECT_EQ(L.at(pic, 1.05, 1.45), cj);  // the features over the lines joining them
+  EXPECT_EQ(L.at(pic, 1.05, 1.45), cj);  // a centre dot over the line ending there
+  EXPECT_EQ(L.at(pic, 1.05 - 0.1, 1.45), pair);  // the line over map J's ring
   EXPECT_TRUE(L.near(pic, 1.05 + 0.1, 1.45, cj));  // map J's point: its ring
   EXPECT_EQ(L.at(pic, 0.0 + 0.2 * 0.6, 0.45 + 0.2 * 0.8), cj);  // map J's line, along (0.6, 0.8)
   EXPECT_EQ(L.at(pic, 0.3, 1.45), pair);   // between the first pair
