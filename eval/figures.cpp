@@ -44,6 +44,25 @@ cv::Mat colourRamp(int colormap) {
   return colour;
 }
 
+cv::Mat coolWarmRamp(int levels) {
+  const cv::Vec3d blue(192, 76, 59), white(247, 247, 247), red(38, 4, 180);  // BGR
+  const double half = (levels - 1) / 2.0;
+  cv::Mat ramp(1, levels, CV_8UC3);
+  for (int i = 0; i < levels; ++i) {
+    const double t = i / half - 1.0;
+    const cv::Vec3d c = t < 0 ? white + (-t) * (blue - white) : white + t * (red - white);
+    ramp.at<cv::Vec3b>(0, i) =
+        cv::Vec3b(uchar(std::lround(c[0])), uchar(std::lround(c[1])), uchar(std::lround(c[2])));
+  }
+  return ramp;
+}
+
+int cellEnlargement(int rows, int cols) {
+  int k = std::max(1, (600 + cols - 1) / std::max(cols, 1));
+  while (k > 1 && rows * k > 2400) --k;
+  return k;
+}
+
 cv::Mat framePicture(const cv::Mat& picture, const std::string& title, const cv::Mat& ramp, double lo,
                      double hi, const char* unit) {
   const int pad = 8, head = 28, foot = 46;

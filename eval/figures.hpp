@@ -23,6 +23,17 @@ Relief reliefImage(const perception::Raster<float>& z, double cell_m);
 // The 256 colours of an OpenCV colour map (cv::COLORMAP_*) as a 1×256 BGR image.
 cv::Mat colourRamp(int colormap);
 
+// A diverging blue–white–red ramp (Moreland's cool-warm ends) of `levels` colours as a 1×levels
+// BGR image: level i at t = 2i/(levels − 1) − 1, white (247, 247, 247) blended linearly towards
+// blue (192, 76, 59) for t < 0 and red (38, 4, 180) for t > 0, each channel rounded. With an odd
+// count the middle level is exactly white. For signed differences: negative blue, positive red.
+cv::Mat coolWarmRamp(int levels = 256);
+
+// The integer factor by which the map pictures enlarge a raster of rows × cols cells
+// (nearest neighbour, every cell a crisp square): the smallest that makes it at least 600 px
+// wide, less while the picture would be taller than 2400 px; at least 1.
+int cellEnlargement(int rows, int cols);
+
 // `picture` with `title` above and, below, a colour scale (a 1×N BGR ramp stretched to fit) whose
 // ends are labelled `lo` and `hi` in `unit` ("%.2f unit"). The canvas is at least 360 px wide.
 cv::Mat framePicture(const cv::Mat& picture, const std::string& title, const cv::Mat& ramp, double lo,

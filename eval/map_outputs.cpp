@@ -35,17 +35,9 @@ struct Swatch {
 
 bool stripe(int x, int y) { return (x + y) / 3 % 3 == 0; }
 
-// Integer nearest-neighbour enlargement so small maps come out at least 600 px wide (within
-// reason for very tall maps); every cell stays a crisp square.
-int enlargement(int rows, int cols) {
-  int k = std::max(1, (600 + cols - 1) / cols);
-  while (k > 1 && rows * k > 2400) --k;
-  return k;
-}
-
 // One BGR pixel per cell → the enlarged picture, Shadow cells hatched in purple and magenta.
 cv::Mat enlarge(const cv::Mat& cells, const ElevationMap& map) {
-  const int k = enlargement(cells.rows, cells.cols);
+  const int k = cellEnlargement(cells.rows, cells.cols);
   cv::Mat out;
   cv::resize(cells, out, cv::Size(), k, k, cv::INTER_NEAREST);
   for (int y = 0; y < out.rows; ++y)
@@ -78,19 +70,6 @@ cv::Mat withLegend(const cv::Mat& canvas, const std::vector<Swatch>& entries, co
     cv::putText(out, note, cv::Point(x, y + 12), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(90, 90, 90), 1,
                 cv::LINE_AA);
   return out;
-}
-
-// A diverging blue–white–red ramp (Moreland's cool-warm ends), symmetric about its middle.
-cv::Mat divergingRamp() {
-  const cv::Vec3d blue(192, 76, 59), white(247, 247, 247), red(38, 4, 180);  // BGR
-  cv::Mat ramp(1, 256, CV_8UC3);
-  for (int i = 0; i < 256; ++i) {
-    const double t = i / 127.5 - 1.0;
-    const cv::Vec3d c = t < 0 ? white + (-t) * (blue - white) : white + t * (red - white);
-    ramp.at<cv::Vec3b>(0, i) =
-        cv::Vec3b(uchar(std::lround(c[0])), uchar(std::lround(c[1])), uchar(std::lround(c[2])));
-  }
-  return ramp;
 }
 
 std::string format(const char* pattern, double v) {
@@ -126,7 +105,7 @@ cv::Mat errorPicture(const ElevationMap& map, const ElevationMap& truth_map, con
     std::nth_element(abs_err.begin(), p99, abs_err.end());
     scale = std::max(scale, *p99);
   }
-  const cv::Mat ramp = divergingRamp();
+  const cv::Mat ramp = coolWarmRamp();
   cv::Mat cells(rows, cols, CV_8UC3);
   for (int r = 0; r < rows; ++r)
     for (int c = 0; c < cols; ++c) {

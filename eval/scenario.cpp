@@ -336,11 +336,7 @@ const char* matchMethodName(MatchMethod m) {
   }
   return "?";
 }
-std::string matchMethodFileName(MatchMethod m) {
-  std::string name = matchMethodName(m);
-  std::replace(name.begin(), name.end(), '+', '_');
-  return name;
-}
+
 
 Eigen::Isometry3d MatchingSpec::initialEstimate(const Eigen::Isometry3d& T_IJ) const {
   return T_IJ * perception::sensorPose(initial_error.xyz_m, initial_error.rpy_rad);

@@ -52,10 +52,9 @@ struct MapSpec {
 
 // The registration methods a `matching:` section may name (docs/scenario.md, "matching").
 using MatchMethod = perception::RegistrationMethod;
-// The scenario's name of a method ("features+iconic"), and the form a file name takes
-// ("features_iconic").
+// The scenario's name of a method ("features+iconic"; in file names, eval/match_figures.hpp's
+// methodFileName).
 const char* matchMethodName(MatchMethod m);
-std::string matchMethodFileName(MatchMethod m);
 
 struct MatchingSpec {
   std::vector<std::pair<int, int>> pairs;  // (I, J): view J registered against view I

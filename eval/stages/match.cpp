@@ -3,11 +3,13 @@
 // believes T_0 = T_IJ·E (E the scenario's initial_error) and hands image J to the matcher at the
 // believed pose; view I's map (map stage) is the reference. A method estimates the transform from
 // the world to the rover's believed world of view J, and with it the pose of sensor J; nothing a
-// method sees depends on the true pose of J. matching/pair_I_J_METHOD.json and metrics.registration.
+// method sees depends on the true pose of J. matching/pair_I_J_METHOD.json and metrics.registration;
+// pictures of the views' features, the pair's maps before and after, and the methods' residuals.
 #include <cstdio>
 #include <string>
 
 #include "eval/io.hpp"
+#include "eval/match_figures.hpp"
 #include "eval/stages.hpp"
 #include "perception/registration.hpp"
 #include "perception/rigid_transform.hpp"
@@ -47,11 +49,51 @@ nlohmann::ordered_json featuresJson(const std::vector<perception::Feature>& feat
   return out;
 }
 
+// ---- Pictures (eval/match_figures.hpp), apart from the registration: they only read its results.
+struct Registered {
+  std::string method;
+  Eigen::Isometry3d corrected_WS;  // sensor J where the method puts it
+  std::vector<double> rms_m;
+};
+
+// matching/view_K_features.png: each view's map with its features.
+void featurePictures(const RunState& s) {
+  for (int k = 0; k < int(s.views.size()); ++k) {
+    const perception::ElevationMap& map = s.views[k].locus->map;
+    writeFeaturesPicture(s.out / "matching", k, map, perception::extractFeatures(map),
+                         s.scenario.name + ": " + viewName(k) + " locus map");
+  }
+}
+
+// Image J mapped on map I's grid (perception::scanToMap, as the map stage maps it) at the believed
+// pose and at each method's estimate: matching/pair_I_J_difference_METHOD.png and
+// pair_I_J_convergence.png.
+void pairPictures(const RunState& s, int i, int j, const Eigen::Isometry3d& believed_WS,
+                  const std::vector<Registered>& registered) {
+  const Scenario& sc = s.scenario;
+  const perception::ElevationMap& map_i = s.views[i].locus->map;
+  const auto mapJ = [&](const Eigen::Isometry3d& T_WS) {
+    return perception::scanToMap(s.views[j].scan->image, sc.sensor, T_WS, map_i.grid(), sc.map->scanToMapConfig()).map;
+  };
+  const perception::ElevationMap before = mapJ(believed_WS);
+  std::vector<perception::ElevationMap> after;
+  after.reserve(registered.size());  // RegisteredMap points into it
+  std::vector<RegisteredMap> maps;
+  for (const Registered& r : registered) {
+    if (r.rms_m.empty()) continue;
+    after.push_back(mapJ(r.corrected_WS));
+    maps.push_back({r.method, &after.back(), r.rms_m});
+  }
+  writePairPictures(s.out / "matching", i, j, map_i, before, maps, sc.name);
+}
+// ---- End of the pictures.
+
 void run(RunState& s) {
   const Scenario& sc = s.scenario;
   const MatchingSpec& spec = *sc.matching;
   std::filesystem::create_directories(s.out / "matching");
   s.metrics["registration"] = nlohmann::ordered_json::array();
+  featurePictures(s);
   for (const auto& [i, j] : spec.pairs) {
     const ViewState& vi = s.views[i];
     const ViewState& vj = s.views[j];
@@ -64,6 +106,7 @@ void run(RunState& s) {
     const perception::RegistrationConfig config = registrationConfig(sc);
     const perception::ElevationMap& map_i = vi.locus->map;
     const perception::MapGrid grid_j = perception::believedGrid(map_i.grid(), vi.T_WS, believed_WS);
+    std::vector<Registered> registered;
     for (const MatchMethod method : spec.methods) {
       Stopwatch t;
       const perception::RegistrationResult reg = perception::registerViews(
@@ -120,7 +163,8 @@ void run(RunState& s) {
       nlohmann::ordered_json trace = nlohmann::ordered_json::array();
       for (std::size_t k = 0; k < res.rms_m.size(); ++k) trace.push_back({{"iteration", k}, {"rms_m", res.rms_m[k]}});
       pair["trace"] = trace;
-      writeJson(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + matchMethodFileName(method) + ".json"), pair);
+      writeJson(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + methodFileName(name) + ".json"), pair);
+      registered.push_back({name, perception::poseFromVector(reg.nu).inverse() * believed_WS, res.rms_m});
       nlohmann::ordered_json m;
       m["pair"] = {i, j};
       m["method"] = name;
@@ -138,6 +182,7 @@ void run(RunState& s) {
                     start.rotation_deg, success ? "" : "  FAILED");
       s.say(line);
     }
+    pairPictures(s, i, j, believed_WS, registered);
   }
 }
 

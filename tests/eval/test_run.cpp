@@ -281,7 +281,11 @@ matching:
     EXPECT_EQ(pair["translation_error_m"].get<double>(), m["translation_error_m"].get<double>());
     ASSERT_GE(pair["trace"].size(), 2u);  // the start and at least one step
     EXPECT_LT(pair["trace"].back()["rms_m"].get<double>(), pair["trace"][0]["rms_m"].get<double>());
+    EXPECT_TRUE(fs::is_regular_file(run.dir / "matching" / ("pair_0_1_difference_" + method + ".png")));
   }
+  // The pictures (eval/match_figures.hpp, tested in test_match_figures.cpp).
+  for (const char* name : {"view_0_features.png", "view_1_features.png", "pair_0_1_convergence.png"})
+    EXPECT_TRUE(fs::is_regular_file(run.dir / "matching" / name)) << name;
 }
 
 }  // namespace
