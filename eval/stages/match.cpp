@@ -159,6 +159,15 @@ void run(RunState& s) {
         f["hypotheses"] = fm.hypotheses;
         f["exhausted"] = fm.exhausted;
         pair["feature_matching"] = f;
+        // Fig. 5: map J's features moved into map I's frame by T_F (M_J → M_I: T_F⁻¹).
+        std::vector<perception::Feature> moved;
+        const Eigen::Isometry3d T_F_inv = perception::poseFromVector(fm.nu).inverse();
+        for (const perception::Feature& fj : reg.features_j) moved.push_back(perception::transformed(fj, T_F_inv));
+        writePng(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_correspondence_" +
+                                       methodFileName(name) + ".png"),
+                 correspondencePicture(map_i, reg.features_i, moved, fm.pairs,
+                                       sc.name + ": views " + std::to_string(i) + "-" + std::to_string(j) +
+                                           ", features after T_F (" + name + ")"));
       }
       nlohmann::ordered_json trace = nlohmann::ordered_json::array();
       for (std::size_t k = 0; k < res.rms_m.size(); ++k) trace.push_back({{"iteration", k}, {"rms_m", res.rms_m[k]}});

@@ -1,9 +1,9 @@
-// Two-view iconic matching on simulated scans of Mars-like ground with rocks (the matching
-// issue's case): view J 1 m from view I and turned 10°, believed 0.3 m and 3° off. Noise-free,
-// Levenberg-Marquardt recovers the relative pose to 5 mm and 0.05°; with the ERIM's noise,
-// quantisation and mixed pixels both iconic methods reach 5 cm and 0.5°. The paper's descent
-// (eq. 4) noise-free is recorded, not asserted: from this start it stalls in the valley that
-// couples yaw and translation (docs/matching.md).
+// Two-view matching on simulated scans of Mars-like ground with rocks (the matching issue's
+// case): view J 1 m from view I and turned 10°, believed 0.3 m and 3° off. Noise-free, every
+// iconic method recovers the relative pose to 5 mm and 0.05° and feature matching alone to 10 cm
+// and 1° (close enough for iconic matching to take over); with the ERIM's noise, quantisation and
+// mixed pixels the iconic methods reach 5 cm and 0.5°. And the paper's case for feature matching:
+// believed 2 m and 30° off, where iconic matching alone is lost, features bring it within reach.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -16,7 +16,7 @@
 namespace ambler::eval {
 namespace {
 
-std::string scenario(bool noisy) {
+std::string scenario(bool noisy, const std::string& initial_error = "{xyz_m: [0.2, 0.2, 0.1], rpy_deg: [0, 0, 3]}") {
   return std::string(R"(
 name: matching_test
 seed: 3
@@ -35,17 +35,16 @@ map:
   region: {x_m: [-5, 5], y_m: [-3, 8]}
   baseline: none
 matching:
-  methods: [iconic, iconic_lm]
-  initial_error: {xyz_m: [0.2, 0.2, 0.1], rpy_deg: [0, 0, 3]}
-)";
+  methods: [features, features+iconic, iconic, iconic_lm]
+  initial_error: )" + initial_error + "\n";
 }
 
-TEST(Matching, IconicMethodsRecoverTheRelativePose) {
+TEST(Matching, EveryMethodRecoversTheRelativePose) {
   for (const bool noisy : {false, true}) {
     const Scenario sc = parseScenario(scenario(noisy), "inline.yaml");
     test::TempDir run;
     const auto metrics = runScenario(sc, {run.dir, false});
-    ASSERT_EQ(metrics["registration"].size(), 2u);
+    ASSERT_EQ(metrics["registration"].size(), 4u);
     for (const auto& m : metrics["registration"]) {
       const std::string method = m["method"].get<std::string>();
       const double t = m["translation_error_m"].get<double>(), r = m["rotation_error_deg"].get<double>();
@@ -53,13 +52,38 @@ TEST(Matching, IconicMethodsRecoverTheRelativePose) {
                   method.c_str(), m["iterations"].get<int>(), t, r, m["initial_translation_error_m"].get<double>(),
                   m["initial_rotation_error_deg"].get<double>());
       EXPECT_NEAR(m["initial_translation_error_m"].get<double>(), 0.3, 1e-9);
-      if (noisy) {
+      if (method == "features") {
+        EXPECT_LT(t, 0.10) << method;
+        EXPECT_LT(r, 1.0) << method;
+      } else if (noisy) {
         EXPECT_LT(t, 0.05) << method;
         EXPECT_LT(r, 0.5) << method;
-      } else if (method == "iconic_lm") {
-        EXPECT_LT(t, 0.005);
-        EXPECT_LT(r, 0.05);
+      } else {
+        EXPECT_LT(t, 0.005) << method;
+        EXPECT_LT(r, 0.05) << method;
       }
+    }
+  }
+}
+
+// The paper's fig. 5 case: 2 m and 30° between the belief and the truth. Feature matching's
+// search finds the pairing (to 10 cm and 1°) and the paper's descent from T_F finishes the job
+// (5 cm, 0.5°); LM alone, from T_0, is recorded, not asserted (it is outside its basin).
+TEST(Matching, FeaturesHandleThePapersCase) {
+  const Scenario sc = parseScenario(scenario(true, "{xyz_m: [1.6, -1.2, 0.0], rpy_deg: [0, 0, 30]}"), "inline.yaml");
+  test::TempDir run;
+  const auto metrics = runScenario(sc, {run.dir, false});
+  for (const auto& m : metrics["registration"]) {
+    const std::string method = m["method"].get<std::string>();
+    const double t = m["translation_error_m"].get<double>(), r = m["rotation_error_deg"].get<double>();
+    std::printf("%s: %.4f m %.3f deg (from %.3f m %.2f deg)\n", method.c_str(), t, r,
+                m["initial_translation_error_m"].get<double>(), m["initial_rotation_error_deg"].get<double>());
+    if (method == "features") {
+      EXPECT_LT(t, 0.10);
+      EXPECT_LT(r, 1.0);
+    } else if (method == "features+iconic") {
+      EXPECT_LT(t, 0.05);
+      EXPECT_LT(r, 0.5);
     }
   }
 }
