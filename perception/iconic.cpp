@@ -99,6 +99,20 @@ double medianSigma(const ElevationMap& map) {
   return std::max(1e-3, double(s[s.size() / 2]));
 }
 
+// The mean of map 1's known cells (x, y, z): where the overlap's weight is.
+Eigen::Vector3d knownCentroid(const ElevationMap& map) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  long n = 0;
+  for (int r = 0; r < map.grid().rows; ++r)
+    for (int c = 0; c < map.grid().cols; ++c)
+      if (map.stateAt(r, c) == CellState::Known) {
+        const Eigen::Vector2d xy = map.grid().center(r, c);
+        sum += Eigen::Vector3d(xy.x(), xy.y(), map.elevation()(r, c));
+        ++n;
+      }
+  return n ? Eigen::Vector3d(sum / double(n)) : sum;
+}
+
 void finishResult(IconicResult& res, const ElevationMap& map1, const LocusMapper& image2) {
   const IconicError e = iconicError(map1, image2, res.nu);
   res.overlap = e.overlap;
@@ -225,26 +239,39 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
                                    const IconicOptions& options) {
   IconicResult res;
   res.nu = nu0;
-  IconicError e = iconicError(map1, image2, res.nu);
-  res.rms_m.push_back(std::sqrt(meanSquare(e)));
-  double k = 0.5;  // the step in units of the per-parameter scale below, adapted from there
+  // LM's two departures (map 1's normals in the gradient, the annealed Cauchy loss) and its scale.
+  const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
+  const double c_noise = options.robust_sigmas * std::sqrt(2.0) * medianSigma(map1);
+  const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
+  const auto eval = [&](const PoseVector& nu, double c) { return iconicError(map1, image2, nu, true, c, &normals); };
+  IconicError e = eval(res.nu, 0.0);
+  res.rms_m.push_back(rms(e));
+  double c = scale(e);
+  if (c > 0) e = eval(res.nu, c);
+  // The gain K = A·diag(AᵀHA)⁻¹·Aᵀ: ν = A·μ, μ = (r, t′) with the rotation about the centroid of
+  // map 1's known cells (t = t′ + centroid × r), so that a yaw does not drag a translation with it
+  // through the map's far-away origin; each μ_i then steps on its own scale 1/(AᵀHA)_ii.
+  Matrix6d A = Matrix6d::Identity();
+  A.block<3, 3>(3, 0) = skew(knownCentroid(map1));
+  double k = 0.5;  // the step in units of that gain, adapted from there
   for (; res.iterations < options.max_iterations && e.overlap > 6; ++res.iterations) {
-    if (std::sqrt(meanSquare(e)) < options.floor_m) {
+    if (rms(e) < options.floor_m) {
       res.converged = true;
       break;
     }
-    // k per parameter: 1/(JᵀJ)_ii, so that a rotation in radians and a translation in metres take
-    // steps of their own scale (a scalar k would move one and not the other).
-    const PoseVector g = (0.5 * e.gradient).cwiseQuotient(e.JtJ.diagonal().cwiseMax(1e-12));
+    const PoseVector scaled = (A.transpose() * e.JtJ * A).diagonal().cwiseMax(1e-12);
+    const PoseVector g = A * (0.5 * A.transpose() * e.gradient).cwiseQuotient(scaled);
     bool stepped = false;
     for (int halvings = 0; halvings < 40 && !stepped; ++halvings, k *= 0.5) {
       const PoseVector trial = res.nu - k * g;
-      const IconicError t = iconicError(map1, image2, trial);
+      const IconicError t = eval(trial, c);
       if (t.overlap > 6 && meanSquare(t) < meanSquare(e)) {
         const double decrease = (meanSquare(e) - meanSquare(t)) / meanSquare(e);
         res.nu = trial, e = t, stepped = true;
-        res.rms_m.push_back(std::sqrt(meanSquare(e)));
-        if (decrease < options.min_relative_decrease) res.converged = true;
+        res.rms_m.push_back(rms(e));
+        res.converged = decrease < options.min_relative_decrease && c == c_noise;
+        const double c_next = scale(e);
+        if (c_next < c) c = c_next, e = eval(res.nu, c);  // the loss narrows with the residuals
       }
     }
     if (!stepped || res.converged) {

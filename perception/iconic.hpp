@@ -99,10 +99,12 @@ struct Degeneracy {
 // its largest component. A level plane leaves tx, ty and rz free; a sinusoid along x leaves ty.
 Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio = 1e-4);
 
-// The paper's gradient descent (eq. 4), ν ← ν − k·∂E/∂ν, with a step per parameter,
-// k_i = k/(JᵀJ)_ii (rotations and translations have different units; the paper leaves k to the
-// user), k halved until the mean squared residual decreases and grown again after each success,
-// until the decrease is below min_relative_decrease or the RMS below floor_m.
+// The paper's gradient descent (eq. 4), ν ← ν − K·∂E/∂ν, with the gain K = k·A·diag(AᵀHA)⁻¹·Aᵀ:
+// ν = A·μ takes rotations about the centroid of map 1's known cells, and each μ_i steps on its own
+// scale 1/(AᵀHA)_ii, H = JᵀJ (rotations and translations have different units; the paper leaves k
+// to the user). k is halved until the cost per line decreases and grown again after each success,
+// until the decrease is below min_relative_decrease (at the loss's narrowest scale) or the RMS
+// below floor_m. As LM: map 1's normals in the gradient, the annealed Cauchy loss; one level.
 IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                    const IconicOptions& options = {});
 
