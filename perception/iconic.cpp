@@ -19,16 +19,74 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
   return S;
 }
 
+// The least σ of a residual in the weighted cost: the sensor model's floor, one 1 mm count's
+// rounding (q²/12), so that a noise-free pair keeps finite weights.
+constexpr double kSigmaFloor2 = 1e-6 / 12.0;
+
 // One map row's share of E and its gradient.
 struct RowSum {
-  double E = 0, sum_r2 = 0;
+  double E = 0, sum_r2 = 0, sum_u2 = 0;
   PoseVector gradient = PoseVector::Zero();
   Matrix6d JtJ = Matrix6d::Zero();
   long overlap = 0;
 };
 
+// One line's residual: the cell's vertical line moved by T and met with image 2.
+struct LineTerm {
+  Eigen::Vector3d base;  // u: the cell's centre at z = 0 in map 1's frame
+  LocusHit hit;
+  double diff = 0;   // r = z₁ − s
+  double sigma = 1;  // σ of r (weighted: √(σ₁² + σ₂²)), else 1
+  double u = 0;      // r/σ
+};
+
+// T and its derivatives, shared by every line of one evaluation.
+struct LineModel {
+  Eigen::Matrix3d R;
+  Eigen::Vector3d t;
+  Eigen::Matrix3d dR[3];
+  const Eigen::Vector3d v{0, 0, 1};
+  LineModel(const PoseVector& nu, bool with_gradient) {
+    const Eigen::Isometry3d T = poseFromVector(nu);
+    R = T.linear(), t = T.translation();
+    if (with_gradient)
+      for (int k = 0; k < 3; ++k) dR[k] = rotationDerivative(nu.head<3>(), k);
+  }
+  // False where map 1's cell or image 2's crossing is not Known.
+  bool residual(const ElevationMap& map1, const LocusMapper& image2, int r, int c, bool weighted, LineTerm& l) const {
+    if (map1.stateAt(r, c) != CellState::Known) return false;
+    const Eigen::Vector2d xy = map1.grid().center(r, c);
+    l.base = Eigen::Vector3d(xy.x(), xy.y(), 0.0);
+    l.hit = image2.intersect(R * l.base + t, R * v);
+    if (l.hit.state != CellState::Known) return false;
+    // g = T⁻¹·f₂ = u + s·v: f₁ − g is (z₁ − s)·v.
+    l.diff = double(map1.elevation()(r, c)) - l.hit.s;
+    if (weighted) {
+      const double s1 = map1.sigma()(r, c);
+      l.sigma = std::sqrt(std::max(s1 * s1 + l.hit.sigma * l.hit.sigma, kSigmaFloor2));
+      if (!std::isfinite(l.sigma)) return false;
+    }
+    l.u = l.diff / l.sigma;
+    return true;
+  }
+  // The residual's Jacobian J = −∂s/∂ν (unnormalized), with map 1's normal at cell `index` where
+  // given; false where the line grazes the surface.
+  bool jacobian(const LocusMapper& image2, const std::vector<Eigen::Vector3d>* normals, long index, const LineTerm& l,
+                PoseVector& J) const {
+    const Eigen::Vector3d* ref = normals ? &(*normals)[std::size_t(index)] : nullptr;
+    const Eigen::Vector3d n = ref && std::isfinite(ref->x()) ? Eigen::Vector3d(R * *ref) : image2.surfaceNormal(l.hit);
+    const Eigen::Vector3d v2 = R * v;
+    const double nv = n.dot(v2);
+    if (std::abs(nv) < 1e-12) return false;  // the line grazes the surface: no derivative
+    for (int k = 0; k < 3; ++k) J(k) = n.dot(dR[k] * l.base + l.hit.s * (dR[k] * v)) / nv;
+    for (int k = 0; k < 3; ++k) J(3 + k) = n(k) / nv;
+    return true;
+  }
+};
+
 double meanSquare(const IconicError& e) { return e.overlap ? e.E / double(e.overlap) : 0.0; }
 double rms(const IconicError& e) { return e.overlap ? std::sqrt(e.sum_r2 / double(e.overlap)) : 0.0; }
+double rmsNormalized(const IconicError& e) { return e.overlap ? std::sqrt(e.sum_u2 / double(e.overlap)) : 0.0; }
 
 // The median σ_z of a map's known cells, at least the sensor model's 1 mm floor.
 double medianSigma(const ElevationMap& map) {
@@ -39,6 +97,20 @@ double medianSigma(const ElevationMap& map) {
   if (s.empty()) return 1e-3;
   std::nth_element(s.begin(), s.begin() + long(s.size() / 2), s.end());
   return std::max(1e-3, double(s[s.size() / 2]));
+}
+
+// The mean of map 1's known cells (x, y, z): where the overlap's weight is.
+Eigen::Vector3d knownCentroid(const ElevationMap& map) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  long n = 0;
+  for (int r = 0; r < map.grid().rows; ++r)
+    for (int c = 0; c < map.grid().cols; ++c)
+      if (map.stateAt(r, c) == CellState::Known) {
+        const Eigen::Vector2d xy = map.grid().center(r, c);
+        sum += Eigen::Vector3d(xy.x(), xy.y(), map.elevation()(r, c));
+        ++n;
+      }
+  return n ? Eigen::Vector3d(sum / double(n)) : sum;
 }
 
 void finishResult(IconicResult& res, const ElevationMap& map1, const LocusMapper& image2) {
@@ -125,43 +197,28 @@ std::vector<Eigen::Vector3d> referenceNormals(const ElevationMap& map) {
 }
 
 IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, bool with_gradient,
-                        double cauchy_c, const std::vector<Eigen::Vector3d>* reference_normals, int stride) {
+                        double cauchy_c, const std::vector<Eigen::Vector3d>* reference_normals, int stride,
+                        bool weighted) {
   const MapGrid& grid = map1.grid();
-  const Eigen::Isometry3d T = poseFromVector(nu);
-  const Eigen::Matrix3d R = T.linear();
-  const Eigen::Vector3d t = T.translation();
-  const Eigen::Vector3d v(0, 0, 1);
-  Eigen::Matrix3d dR[3];
-  if (with_gradient)
-    for (int k = 0; k < 3; ++k) dR[k] = rotationDerivative(nu.head<3>(), k);
+  const LineModel model(nu, with_gradient);
   std::vector<RowSum> rows(grid.rows);
   tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
       RowSum& sum = rows[r];
       if (r % stride != 0) continue;
       for (int c = 0; c < grid.cols; c += stride) {
-        if (map1.stateAt(r, c) != CellState::Known) continue;
-        const Eigen::Vector2d xy = grid.center(r, c);
-        const Eigen::Vector3d u(xy.x(), xy.y(), 0.0);
-        const Eigen::Vector3d u2 = R * u + t, v2 = R * v;
-        const LocusHit hit = image2.intersect(u2, v2);
-        if (hit.state != CellState::Known) continue;
-        // g = T⁻¹·f₂ = u + s·v: f₁ − g is (z₁ − s)·v.
-        const double diff = double(map1.elevation()(r, c)) - hit.s;
-        const double w = cauchy_c > 0 ? 1.0 / (1.0 + diff * diff / (cauchy_c * cauchy_c)) : 1.0;
-        sum.E += cauchy_c > 0 ? cauchy_c * cauchy_c * std::log1p(diff * diff / (cauchy_c * cauchy_c)) : diff * diff;
-        sum.sum_r2 += diff * diff;
+        LineTerm l;
+        if (!model.residual(map1, image2, r, c, weighted, l)) continue;
+        const double w = cauchy_c > 0 ? 1.0 / (1.0 + l.u * l.u / (cauchy_c * cauchy_c)) : 1.0;
+        sum.E += cauchy_c > 0 ? cauchy_c * cauchy_c * std::log1p(l.u * l.u / (cauchy_c * cauchy_c)) : l.u * l.u;
+        sum.sum_r2 += l.diff * l.diff;
+        sum.sum_u2 += l.u * l.u;
         ++sum.overlap;
         if (!with_gradient) continue;
-        const Eigen::Vector3d* ref = reference_normals ? &(*reference_normals)[std::size_t(r) * grid.cols + c] : nullptr;
-        const Eigen::Vector3d n = ref && std::isfinite(ref->x()) ? Eigen::Vector3d(R * *ref) : image2.surfaceNormal(hit);
-        const double nv = n.dot(v2);
-        if (std::abs(nv) < 1e-12) continue;  // the line grazes the surface: no derivative
-        // The residual diff = z₁ − s has the Jacobian J = −∂s/∂ν.
         PoseVector J;
-        for (int k = 0; k < 3; ++k) J(k) = n.dot(dR[k] * u + hit.s * (dR[k] * v)) / nv;
-        for (int k = 0; k < 3; ++k) J(3 + k) = n(k) / nv;
-        sum.gradient += 2 * w * diff * J;
+        if (!model.jacobian(image2, reference_normals, r * grid.cols + c, l, J)) continue;
+        J /= l.sigma;  // the normalized residual's (σ = 1 unweighted)
+        sum.gradient += 2 * w * l.u * J;
         sum.JtJ += w * J * J.transpose();
       }
     }
@@ -170,6 +227,7 @@ IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, con
   for (const RowSum& s : rows) {  // in row order: the same sums whatever the threads did
     out.E += s.E;
     out.sum_r2 += s.sum_r2;
+    out.sum_u2 += s.sum_u2;
     out.gradient += s.gradient;
     out.JtJ += s.JtJ;
     out.overlap += s.overlap;
@@ -181,26 +239,39 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
                                    const IconicOptions& options) {
   IconicResult res;
   res.nu = nu0;
-  IconicError e = iconicError(map1, image2, res.nu);
-  res.rms_m.push_back(std::sqrt(meanSquare(e)));
-  double k = 0.5;  // the step in units of the per-parameter scale below, adapted from there
+  // LM's two departures (map 1's normals in the gradient, the annealed Cauchy loss) and its scale.
+  const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
+  const double c_noise = options.robust_sigmas * std::sqrt(2.0) * medianSigma(map1);
+  const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
+  const auto eval = [&](const PoseVector& nu, double c) { return iconicError(map1, image2, nu, true, c, &normals); };
+  IconicError e = eval(res.nu, 0.0);
+  res.rms_m.push_back(rms(e));
+  double c = scale(e);
+  if (c > 0) e = eval(res.nu, c);
+  // The gain K = A·diag(AᵀHA)⁻¹·Aᵀ: ν = A·μ, μ = (r, t′) with the rotation about the centroid of
+  // map 1's known cells (t = t′ + centroid × r), so that a yaw does not drag a translation with it
+  // through the map's far-away origin; each μ_i then steps on its own scale 1/(AᵀHA)_ii.
+  Matrix6d A = Matrix6d::Identity();
+  A.block<3, 3>(3, 0) = skew(knownCentroid(map1));
+  double k = 0.5;  // the step in units of that gain, adapted from there
   for (; res.iterations < options.max_iterations && e.overlap > 6; ++res.iterations) {
-    if (std::sqrt(meanSquare(e)) < options.floor_m) {
+    if (rms(e) < options.floor_m) {
       res.converged = true;
       break;
     }
-    // k per parameter: 1/(JᵀJ)_ii, so that a rotation in radians and a translation in metres take
-    // steps of their own scale (a scalar k would move one and not the other).
-    const PoseVector g = (0.5 * e.gradient).cwiseQuotient(e.JtJ.diagonal().cwiseMax(1e-12));
+    const PoseVector scaled = (A.transpose() * e.JtJ * A).diagonal().cwiseMax(1e-12);
+    const PoseVector g = A * (0.5 * A.transpose() * e.gradient).cwiseQuotient(scaled);
     bool stepped = false;
     for (int halvings = 0; halvings < 40 && !stepped; ++halvings, k *= 0.5) {
       const PoseVector trial = res.nu - k * g;
-      const IconicError t = iconicError(map1, image2, trial);
+      const IconicError t = eval(trial, c);
       if (t.overlap > 6 && meanSquare(t) < meanSquare(e)) {
         const double decrease = (meanSquare(e) - meanSquare(t)) / meanSquare(e);
         res.nu = trial, e = t, stepped = true;
-        res.rms_m.push_back(std::sqrt(meanSquare(e)));
-        if (decrease < options.min_relative_decrease) res.converged = true;
+        res.rms_m.push_back(rms(e));
+        res.converged = decrease < options.min_relative_decrease && c == c_noise;
+        const double c_next = scale(e);
+        if (c_next < c) c = c_next, e = eval(res.nu, c);  // the loss narrows with the residuals
       }
     }
     if (!stepped || res.converged) {
@@ -214,20 +285,29 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
   return res;
 }
 
-IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
-                                      const IconicOptions& options) {
+namespace {
+
+// LM on the plain residuals (weighted = false) or on r/σ; `c_final` receives the loss's last scale.
+IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
+                                const IconicOptions& options, const std::vector<Eigen::Vector3d>& normals,
+                                bool weighted, double& c_final) {
   IconicResult res;
   res.nu = nu0;
-  const double c_noise = options.robust_sigmas * std::sqrt(2.0) * medianSigma(map1);
-  const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
-  const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
+  // The loss's narrowest scale: robust_sigmas σ of a residual, σ of the difference of two maps
+  // (√2·σ̃ in metres), or 1 for r/σ.
+  const double c_noise = options.robust_sigmas * (weighted ? 1.0 : std::sqrt(2.0) * medianSigma(map1));
+  const auto spread = [&](const IconicError& at) { return weighted ? rmsNormalized(at) : rms(at); };
+  const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * spread(at)) : 0.0; };
   const double half_diagonal = 0.5 * std::hypot(map1.grid().cols * map1.grid().cell, map1.grid().rows * map1.grid().cell);
   const std::vector<int> strides = options.strides.empty() ? std::vector<int>{1} : options.strides;
+  double c = 0;
   for (std::size_t level = 0; level < strides.size(); ++level) {
     const int stride = std::max(1, strides[level]);
-    const auto eval = [&](const PoseVector& nu, double c) { return iconicError(map1, image2, nu, true, c, &normals, stride); };
+    const auto eval = [&](const PoseVector& nu, double c) {
+      return iconicError(map1, image2, nu, true, c, &normals, stride, weighted);
+    };
     IconicError e = eval(res.nu, 0.0);
-    double c = scale(e);
+    c = scale(e);
     if (c > 0) e = eval(res.nu, c);
     if (level == 0) res.rms_m.push_back(rms(e));
     double lambda = 1e-3;
@@ -271,16 +351,136 @@ IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMappe
     }
     res.converged = converged;
   }
+  c_final = c;
+  return res;
+}
+
+}  // namespace
+
+IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
+                                      const IconicOptions& options) {
+  double c = 0;
+  IconicResult res = levenbergMarquardt(map1, image2, nu0, options, referenceNormals(map1), false, c);
   finishResult(res, map1, image2);
   return res;
+}
+
+IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
+                            const IconicOptions& options) {
+  const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
+  double c = 0;
+  IconicResult res = levenbergMarquardt(map1, image2, nu0, options, normals, true, c);
+  // Whether the surface constrains every motion is a matter of its shape, not of the σ's: the
+  // unweighted JᵀJ decides it (weights that differ by 100 between level ground and a rock's
+  // flank would otherwise name the rock's directions free).
+  const IconicError e = iconicError(map1, image2, res.nu, true, 0.0, &normals, 1, false);
+  res.overlap = e.overlap;
+  const MapGrid& g = map1.grid();
+  const Degeneracy d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell));
+  res.degenerate = d.degenerate;
+  res.free_directions = d.free_directions;
+  if (e.overlap > 6 && !d.degenerate) res.covariance = weightedCovariance(map1, image2, res.nu, c, normals, options.map1_source);
+  else res.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
+  return res;
+}
+
+namespace {
+
+// A crossing's pixels in `image`: the 2×2 cell around (φ, θ) and its bilinear weights, scaled to
+// unit length (Σw² = 1), as flat pixel indices.
+struct PixelShare {
+  long index[4];
+  double weight[4];
+};
+
+PixelShare pixelShare(const RangeImage& image, double phi, double theta) {
+  const int rows = image.rows(), cols = image.cols();
+  const double dphi = rows > 1 ? image.phi[0] - image.phi[1] : 1.0, dtheta = cols > 1 ? image.theta[1] - image.theta[0] : 1.0;
+  const double row = std::clamp((image.phi[0] - phi) / dphi, 0.0, double(rows - 1));
+  const double col = std::clamp((theta - image.theta[0]) / dtheta, 0.0, double(cols - 1));
+  const int r0 = std::min(int(row), std::max(rows - 2, 0)), c0 = std::min(int(col), std::max(cols - 2, 0));
+  const double fr = row - r0, fc = col - c0;
+  PixelShare p;
+  const double w[4] = {(1 - fr) * (1 - fc), (1 - fr) * fc, fr * (1 - fc), fr * fc};
+  const double norm = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2] + w[3] * w[3]);
+  for (int k = 0; k < 4; ++k) {
+    p.index[k] = long(r0 + k / 2) * cols + (c0 + k % 2);
+    p.weight[k] = w[k] / norm;
+  }
+  return p;
+}
+
+// One line's share of the sandwich: its weighted Jacobian g = w·J/σ², its two σ's, and the pixels
+// of each image it reads.
+struct LineShare {
+  PoseVector g;
+  double sigma1, sigma2;
+  PixelShare pixels1, pixels2;
+};
+
+}  // namespace
+
+Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
+                            const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source) {
+  const MapGrid& grid = map1.grid();
+  const LineModel model(nu, true);
+  std::vector<std::vector<LineShare>> rows(grid.rows);
+  std::vector<Matrix6d> H_rows(grid.rows, Matrix6d::Zero());
+  tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& range) {
+    for (int r = range.begin(); r != range.end(); ++r)
+      for (int col = 0; col < grid.cols; ++col) {
+        LineTerm l;
+        PoseVector J;
+        if (!model.residual(map1, image2, r, col, true, l) ||
+            !model.jacobian(image2, &reference_normals, long(r) * grid.cols + col, l, J))
+          continue;
+        const double w = c > 0 ? 1.0 / (1.0 + l.u * l.u / (c * c)) : 1.0;
+        LineShare share;
+        share.g = w * J / (l.sigma * l.sigma);
+        share.sigma1 = map1.sigma()(r, col);
+        share.sigma2 = std::sqrt(std::max(l.sigma * l.sigma - share.sigma1 * share.sigma1, 0.0));
+        share.pixels2 = pixelShare(image2.image(), l.hit.phi, l.hit.theta);
+        share.pixels1 = share.pixels2;  // without map 1's image: its lines share as image 2's do
+        if (map1_source) {
+          const LocusHit h1 = map1_source->intersect(l.base, model.v);
+          if (h1.state == CellState::Known) share.pixels1 = pixelShare(map1_source->image(), h1.phi, h1.theta);
+        }
+        H_rows[r] += w * J * J.transpose() / (l.sigma * l.sigma);
+        rows[r].push_back(share);
+      }
+  });
+  // Per pixel, the sum of σ·(its weight)·g over the lines that read it; S = Σ G·Gᵀ over the pixels
+  // of both images.
+  const RangeImage& im2 = image2.image();
+  const RangeImage& im1 = map1_source ? map1_source->image() : im2;
+  std::vector<PoseVector> G1(std::size_t(im1.rows()) * im1.cols(), PoseVector::Zero()),
+      G2(std::size_t(im2.rows()) * im2.cols(), PoseVector::Zero());
+  Matrix6d H = Matrix6d::Zero();
+  for (int r = 0; r < grid.rows; ++r) {  // in row order: deterministic sums
+    H += H_rows[r];
+    for (const LineShare& l : rows[r])
+      for (int k = 0; k < 4; ++k) {
+        G1[std::size_t(l.pixels1.index[k])] += l.sigma1 * l.pixels1.weight[k] * l.g;
+        G2[std::size_t(l.pixels2.index[k])] += l.sigma2 * l.pixels2.weight[k] * l.g;
+      }
+  }
+  Matrix6d S = Matrix6d::Zero();
+  for (const PoseVector& g : G1) S += g * g.transpose();
+  for (const PoseVector& g : G2) S += g * g.transpose();
+  const Matrix6d Hinv = H.ldlt().solve(Matrix6d::Identity());
+  return Hinv * S * Hinv;
 }
 
 IconicResult registerIconic(const ElevationMap& map_i, const RangeImage& image_j, const Raster<std::uint8_t>* edges_j,
                             const LocusConfig& config, IconicMethod method, const IconicOptions& options) {
   // Image J in the frame the rover believes; ν starts at the identity (it trusts its belief).
   const LocusMapper mapper(image_j, edges_j, config);
-  return method == IconicMethod::Descent ? iconicGradientDescent(map_i, mapper, PoseVector::Zero(), options)
-                                         : iconicLevenbergMarquardt(map_i, mapper, PoseVector::Zero(), options);
+  switch (method) {
+    case IconicMethod::Descent: return iconicGradientDescent(map_i, mapper, PoseVector::Zero(), options);
+    case IconicMethod::Weighted: return iconicWeighted(map_i, mapper, PoseVector::Zero(), options);
+    case IconicMethod::LevenbergMarquardt: break;
+  }
+  return iconicLevenbergMarquardt(map_i, mapper, PoseVector::Zero(), options);
 }
 
 Eigen::Isometry3d correctedPose(const IconicResult& result, const Eigen::Isometry3d& believed_WS) {

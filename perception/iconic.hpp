@@ -17,8 +17,9 @@ using Matrix6d = Eigen::Matrix<double, 6, 6>;
 struct IconicError {
   double E = 0;                              // Σ ‖f₁(u, v) − g(u, v, T)‖² over the overlap, m² (or the robust cost)
   double sum_r2 = 0;                         // Σ r² (the plain E, whatever the loss)
+  double sum_u2 = 0;                         // Σ (r/σ)² (weighted; Σ r² otherwise)
   PoseVector gradient = PoseVector::Zero();  // ∂E/∂ν
-  Matrix6d JtJ = Matrix6d::Zero();           // Σ J·Jᵀ of the residuals' Jacobians (Gauss–Newton)
+  Matrix6d JtJ = Matrix6d::Zero();           // Σ J·Jᵀ of the residuals' Jacobians (Gauss–Newton; JᵀWJ weighted)
   long overlap = 0;                          // lines where both maps are known
 };
 
@@ -38,9 +39,16 @@ struct IconicError {
 // normal of map 1's surface at the cell, moved into image 2's frame, instead of image 2's at the
 // hit: the same at the solution, and far less noisy than a normal from one 2×2 cell of a noisy
 // image (Gauss-Newton's point-to-plane form). E is unchanged; the gradient is then approximate.
+//
+// `weighted`: each residual is divided by its σ, σ² = σ₁² + σ₂² (map 1's σ_z at the cell and image
+// 2's σ along the moved line at the hit, LocusHit::sigma), so E = Σ (r/σ)² (or the Cauchy cost of
+// r/σ, cauchy_c then in units of σ), the gradient Σ 2w·(r/σ)·J/σ and JtJ = JᵀWJ = Σ w·J·Jᵀ/σ². σ is
+// taken as fixed in the derivatives (it changes with ν only through where the line meets image 2).
+// stride: the lines of every stride-th row and column only.
 IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
                         bool with_gradient = true, double cauchy_c = 0,
-                        const std::vector<Eigen::Vector3d>* reference_normals = nullptr, int stride = 1);
+                        const std::vector<Eigen::Vector3d>* reference_normals = nullptr, int stride = 1,
+                        bool weighted = false);
 
 // Map 1's unit surface normals (row-major per cell; NaN where the cell or its neighbours are not
 // known, and there image 2's normal at the hit is used): from central differences of the known
@@ -59,6 +67,10 @@ struct IconicOptions {
   // LM: coarse to fine, the lines of every stride-th cell in each direction first (4: 40 cm lines on
   // a 10 cm map), each level started from the one before; the last stride should be 1.
   std::vector<int> strides{4, 2, 1};
+  // Weighted LM: the locus mapper map 1 was made with (its image and edges, in map 1's frame), so
+  // that the covariance counts the pixels of image 1 that map 1's lines share. Null: map 1's lines
+  // are taken to share pixels as their crossings with image 2 do (docs/matching.md).
+  const LocusMapper* map1_source = nullptr;
 };
 
 struct IconicResult {
@@ -66,7 +78,9 @@ struct IconicResult {
   int iterations = 0;
   std::vector<double> rms_m;           // RMS residual per iteration (the first: at the start)
   long overlap = 0;
-  Matrix6d covariance = Matrix6d::Zero();  // σ²·(JᵀJ)⁻¹ at the estimate, σ² = E/(N − 6)
+  // Descent and LM: σ²·(JᵀJ)⁻¹ at the estimate, σ² = E/(N − 6). Weighted: (JᵀWJ)⁻¹ corrected for
+  // the pixels that neighbouring lines share (weightedCovariance); no σ² from the residuals.
+  Matrix6d covariance = Matrix6d::Zero();
   bool converged = false;
   // Whether the surface leaves some motion unconstrained (degeneracy()), and which: the
   // parameters ("rx", "ry", "rz", "tx", "ty", "tz") that dominate each weak direction.
@@ -85,10 +99,12 @@ struct Degeneracy {
 // its largest component. A level plane leaves tx, ty and rz free; a sinusoid along x leaves ty.
 Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio = 1e-4);
 
-// The paper's gradient descent (eq. 4), ν ← ν − k·∂E/∂ν, with a step per parameter,
-// k_i = k/(JᵀJ)_ii (rotations and translations have different units; the paper leaves k to the
-// user), k halved until the mean squared residual decreases and grown again after each success,
-// until the decrease is below min_relative_decrease or the RMS below floor_m.
+// The paper's gradient descent (eq. 4), ν ← ν − K·∂E/∂ν, with the gain K = k·A·diag(AᵀHA)⁻¹·Aᵀ:
+// ν = A·μ takes rotations about the centroid of map 1's known cells, and each μ_i steps on its own
+// scale 1/(AᵀHA)_ii, H = JᵀJ (rotations and translations have different units; the paper leaves k
+// to the user). k is halved until the cost per line decreases and grown again after each success,
+// until the decrease is below min_relative_decrease (at the loss's narrowest scale) or the RMS
+// below floor_m. As LM: map 1's normals in the gradient, the annealed Cauchy loss; one level.
 IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                    const IconicOptions& options = {});
 
@@ -97,7 +113,24 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
 IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                       const IconicOptions& options = {});
 
-enum class IconicMethod : std::uint8_t { Descent, LevenbergMarquardt };
+// Levenberg–Marquardt on the residuals weighted by 1/(σ₁² + σ₂²) (iconicError's `weighted`; the
+// paper's future work), with the same levels, steps and stopping rules, the Cauchy loss in units of
+// the normalized residual r/σ (its scale from 2·RMS(r/σ) down to robust_sigmas), and the
+// covariance of weightedCovariance.
+IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
+                            const IconicOptions& options = {});
+
+// The covariance of the weighted estimate at ν (Cauchy scale c in units of σ, map 1's normals in
+// the Jacobian), H⁻¹·S·H⁻¹ with H = JᵀWJ: a crossing of a line with an image is interpolated from
+// the four pixels around it, so two lines whose crossings share pixels err together; S sums, per
+// pixel of each image, the weighted Jacobians of the lines that read it, each line's σ spread over
+// its pixels as its bilinear weights spread it (docs/matching.md, "Calibration"). With no pixel
+// shared S = H and the covariance is H⁻¹. map1_source as in IconicOptions (may be null).
+Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
+                            const std::vector<Eigen::Vector3d>& reference_normals,
+                            const LocusMapper* map1_source);
+
+enum class IconicMethod : std::uint8_t { Descent, LevenbergMarquardt, Weighted };
 
 // Registers range image J against map I as the rover would: image_j carries the pose the rover
 // believes (T_WS in map I's frame), edges_j its edge mask (or null), config the locus settings and

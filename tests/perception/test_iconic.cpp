@@ -10,6 +10,8 @@
 #include <cstdio>
 #include <algorithm>
 
+#include <Eigen/Eigenvalues>
+
 #include "perception/iconic.hpp"
 #include "perception/scan_to_map.hpp"
 #include "synthetic.hpp"
@@ -182,16 +184,19 @@ TEST(Iconic, DescentAndLevenbergMarquardtRecoverTheTransform) {
   start += (PoseVector() << 0.005, -0.005, 0.03, 0.1, -0.08, 0.03).finished();
   const PoseError initial = poseError(truth, poseFromVector(start));
   ASSERT_GT(initial.translation_m, 0.1);
-  for (const bool lm : {true, false}) {
-    const IconicResult res = lm ? iconicLevenbergMarquardt(map1, mapper, start) : iconicGradientDescent(map1, mapper, start);
+  for (const IconicMethod method : {IconicMethod::LevenbergMarquardt, IconicMethod::Weighted, IconicMethod::Descent}) {
+    const char* name = method == IconicMethod::Descent ? "descent" : method == IconicMethod::Weighted ? "weighted" : "LM";
+    const IconicResult res = method == IconicMethod::LevenbergMarquardt ? iconicLevenbergMarquardt(map1, mapper, start)
+                             : method == IconicMethod::Weighted         ? iconicWeighted(map1, mapper, start)
+                                                                        : iconicGradientDescent(map1, mapper, start);
     const PoseError err = poseError(truth, poseFromVector(res.nu));
-    EXPECT_LT(err.translation_m, 5e-3) << (lm ? "LM" : "descent") << " after " << res.iterations;
-    EXPECT_LT(err.rotation_deg, 0.05) << (lm ? "LM" : "descent") << " after " << res.iterations;
+    EXPECT_LT(err.translation_m, 5e-3) << name << " after " << res.iterations;
+    EXPECT_LT(err.rotation_deg, 0.05) << name << " after " << res.iterations;
     EXPECT_GT(res.overlap, 1000);
     EXPECT_LT(res.rms_m.back(), res.rms_m.front());
     EXPECT_FALSE(res.degenerate) << "free: " << res.free_directions.size();
-    std::printf("%s: %d iterations, RMS %.4f -> %.5f m, error %.2e m %.2e deg\n", lm ? "LM" : "descent",
-                res.iterations, res.rms_m.front(), res.rms_m.back(), err.translation_m, err.rotation_deg);
+    std::printf("%s: %d iterations, RMS %.4f -> %.5f m, error %.2e m %.2e deg\n", name, res.iterations,
+                res.rms_m.front(), res.rms_m.back(), err.translation_m, err.rotation_deg);
   }
 }
 
@@ -222,6 +227,88 @@ TEST(Iconic, PlaneIsDegenerateInXYAndYaw) {
   const Eigen::Isometry3d T = poseFromVector(res.nu);
   EXPECT_NEAR(T.translation().z(), 0.0, 1e-3);
   EXPECT_LT(std::abs(T.linear()(2, 0)) + std::abs(T.linear()(2, 1)), 1e-3);
+}
+
+}  // namespace
+}  // namespace ambler::perception
+
+namespace ambler::perception {
+namespace {
+
+// The caps seen from two poses, mapped from the first, as the recovery test has them.
+struct CapsPair {
+  Caps caps;
+  SensorModel ideal;
+  ElevationMap map1;
+  RangeImage image2;
+  CapsPair() {
+    ideal.noise_k = 0, ideal.quantization_m = 0, ideal.ambiguity_m = 0;
+    const Eigen::Isometry3d T1 = sensorPose({0, -3, 3}, {0, -30 * kDeg, 0});
+    map1 = scanToMap(capsImage(caps, T1), ideal, T1, MapGrid::covering(-3, 3, 1.5, 8, 0.1)).map;
+    image2 = capsImage(caps, sensorPose({0.3, -2.5, 3}, {0, -32 * kDeg, -4 * kDeg}));
+  }
+};
+
+// The weighted cost is the plain one with each residual divided by σ = √(σ₁² + σ₂²): with σ₁ = 1 m on
+// every cell (σ₂ ≤ a few mm here, so σ² = 1 + O(1e-5)) E, ∂E/∂ν and JᵀWJ are the plain ones to 1e-4.
+TEST(Iconic, WeightedCostDividesEachResidualByItsSigma) {
+  CapsPair p;
+  for (int r = 0; r < p.map1.grid().rows; ++r)
+    for (int c = 0; c < p.map1.grid().cols; ++c)
+      if (p.map1.stateAt(r, c) == CellState::Known) p.map1.sigma()(r, c) = 1.0f;
+  LocusConfig config;
+  config.sensor = p.ideal;
+  const LocusMapper mapper(p.image2, nullptr, config);
+  PoseVector nu;
+  nu << 0.005, -0.005, 0.03, 0.1, -0.08, 0.03;
+  const IconicError plain = iconicError(p.map1, mapper, nu), weighted = iconicError(p.map1, mapper, nu, true, 0, nullptr, 1, true);
+  ASSERT_GT(plain.overlap, 1000);
+  EXPECT_EQ(weighted.overlap, plain.overlap);
+  EXPECT_NEAR(weighted.E, plain.E, 1e-4 * plain.E);
+  EXPECT_NEAR(weighted.sum_u2, plain.sum_r2, 1e-4 * plain.sum_r2);
+  EXPECT_EQ(weighted.sum_r2, plain.sum_r2);
+  EXPECT_LT((weighted.gradient - plain.gradient).norm(), 1e-4 * plain.gradient.norm());
+  EXPECT_LT((weighted.JtJ - plain.JtJ).norm(), 1e-4 * plain.JtJ.norm());
+}
+
+// Lines that share no pixel of either image are independent observations: the covariance is then
+// the inverse information (JᵀWJ)⁻¹ itself. Map 1's cells every 0.6 m: the caps' pixels cover at most
+// 25 cm of ground here (ρ·Δφ/sin γ at 9 m), so no two lines read the same pixel. With every cell
+// (10 cm apart, several lines per pixel) the correction only adds: the covariance exceeds the
+// naive one in every direction.
+TEST(Iconic, WeightedCovarianceOfLinesSharingNoPixelIsTheInverseInformation) {
+  CapsPair p;
+  LocusConfig config;
+  config.sensor = p.ideal;
+  const LocusMapper mapper(p.image2, nullptr, config);
+  const Eigen::Isometry3d T1 = sensorPose({0, -3, 3}, {0, -30 * kDeg, 0});
+  const RangeImage image1 = capsImage(p.caps, T1);
+  const LocusMapper source(image1, nullptr, config);
+  ElevationMap sparse(p.map1.grid());
+  for (int r = 0; r < p.map1.grid().rows; r += 6)
+    for (int c = 0; c < p.map1.grid().cols; c += 6)
+      if (p.map1.stateAt(r, c) == CellState::Known) sparse.setKnown(r, c, p.map1.elevation()(r, c), p.map1.sigma()(r, c));
+  const PoseVector nu = PoseVector::Zero();
+  for (const bool all : {false, true}) {
+    const ElevationMap& m = all ? p.map1 : sparse;
+    const std::vector<Eigen::Vector3d> normals = referenceNormals(m);
+    const IconicError e = iconicError(m, mapper, nu, true, 0, &normals, 1, true);
+    ASSERT_GT(e.overlap, all ? 1000 : 30);
+    const Matrix6d naive = e.JtJ.ldlt().solve(Matrix6d::Identity());
+    for (const LocusMapper* src : {&source, static_cast<const LocusMapper*>(nullptr)}) {
+      const Matrix6d P = weightedCovariance(m, mapper, nu, 0, normals, src);
+      if (!all) {
+        EXPECT_LT((P - naive).norm(), 1e-9 * naive.norm()) << (src ? "with image 1" : "without");
+      } else {
+        // P − naive is positive definite: its least eigenvalue in the naive one's metric.
+        const Eigen::LLT<Matrix6d> L(naive);
+        const Matrix6d Li = L.matrixL().solve(Matrix6d::Identity());
+        const Matrix6d ratio = Li * P * Li.transpose();
+        EXPECT_GT(Eigen::SelfAdjointEigenSolver<Matrix6d>(ratio).eigenvalues().minCoeff(), 1.0)
+            << (src ? "with image 1" : "without");
+      }
+    }
+  }
 }
 
 }  // namespace

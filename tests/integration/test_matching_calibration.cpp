@@ -1,0 +1,115 @@
+// Whether the weighted iconic matcher's covariance is what its errors are (docs/matching.md,
+// "Calibration"): over 50 seeded pairs of noisy ERIM scans of Mars-like ground (the simulated pair
+// of test_matching.cpp: view J 1 m from view I and turned 10°), each registered from a believed pose
+// about 0.3 m and 3° off, the normalized estimation error squared NEES = eᵀ·P⁻¹·e (e = ν̂ − ν, six
+// parameters) is χ² with 6 degrees of freedom if P is right: its mean over 50 trials is 6 ± 0.49
+// (σ of the mean, √(12/50)), and [4.5, 7.5] holds it with three of those σ's to spare. An
+// overconfident P (the naive (JᵀWJ)⁻¹, which takes lines that share pixels for independent ones)
+// fails it. The unweighted LM's σ²·(JᵀJ)⁻¹ is measured alongside, for comparison (not asserted).
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <vector>
+
+#include "base/random.hpp"
+#include "perception/iconic.hpp"
+#include "perception/range_edges.hpp"
+#include "perception/scan_to_map.hpp"
+#include "perception/sensor_geometry.hpp"
+#include "sim/erim_scanner.hpp"
+#include "sim/fixtures.hpp"
+#include "terrains/terrain.hpp"
+
+namespace ambler::perception {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+terrains::TerrainSpec marsGround() {
+  terrains::TerrainSpec spec;
+  spec.kind = terrains::TerrainKind::Mars;
+  spec.size_m = {20.0, 20.0};
+  spec.cell_m = 0.05;
+  spec.rocks = terrains::RockSpec{0.08, 0.1, 1.0};
+  spec.craters = terrains::CraterSpec{3, 1.0, 4.0, 2.0};
+  return spec;
+}
+
+double nees(const PoseVector& e, const Matrix6d& P) { return e.dot(P.ldlt().solve(e)); }
+
+TEST(MatchingCalibration, WeightedCovarianceMatchesTheErrors) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const test::TerrainWorld world(marsGround(), 3);
+  const SensorModel sensor;  // the ERIM: noise, 7.6 cm counts, mixed pixels
+  const sim::ErimScanner scanner(*world.scene, sensor);
+  const Eigen::Isometry3d T_I = sensorPose({0, -6, 3}, {0, -30 * kDeg, 0});
+  const Eigen::Isometry3d T_J = sensorPose({0.6, -5.2, 3}, {0, -30 * kDeg, 10 * kDeg});
+  const MapGrid grid = MapGrid::covering(-5, 5, -3, 8, 0.1);
+  ScanToMapConfig map_config;
+  LocusConfig locus = map_config.locus;
+  locus.sensor = sensor;
+  GncConfig gnc = map_config.gnc;
+  gnc.sensor = sensor;
+  constexpr int kTrials = 50;
+  double sum_weighted = 0, sum_naive = 0, sum_alike = 0, sum_lm = 0, sum_t = 0, sum_r = 0, sum_t_lm = 0, sum_r_lm = 0;
+  int lm_trials = 0;
+  for (int k = 0; k < kTrials; ++k) {
+    const sim::Scan scan_i = scanner.scan(T_I, base::streamKey(2024, k, 0));
+    const sim::Scan scan_j = scanner.scan(T_J, base::streamKey(2024, k, 1));
+    const ScanMap map_i = scanToMap(scan_i.image, sensor, T_I, grid, map_config);
+    const LocusMapper source(map_i.image, &*map_i.edges, locus);
+    // The believed pose of J: 0.2 m across, 0.2 m along, 0.1 m up and 3° of yaw off, each sign drawn.
+    base::Rng rng(base::streamKey(2024, k, 2));
+    const auto sign = [&] { return rng.uniform() < 0.5 ? -1.0 : 1.0; };
+    PoseVector off;
+    off << 0, 0, sign() * 3 * kDeg, sign() * 0.2, sign() * 0.2, sign() * 0.1;
+    const Eigen::Isometry3d believed = T_J * poseFromVector(off);
+    RangeImage image_j = scan_j.image;
+    image_j.T_WS = believed;
+    unwrapRanges(image_j, sensor);
+    const Raster<std::uint8_t> edges_j = detectRangeEdges(image_j, gnc);
+    const LocusMapper mapper(image_j, &edges_j, locus);
+    const PoseVector truth = vectorFromPose(believed * T_J.inverse());
+    IconicOptions options;
+    options.map1_source = &source;
+    const IconicResult res = iconicWeighted(map_i.map, mapper, PoseVector::Zero(), options);
+    ASSERT_FALSE(res.degenerate) << "trial " << k;
+    const PoseVector e = res.nu - truth;
+    const double n = nees(e, res.covariance);
+    sum_weighted += n;
+    const PoseError err = poseError(believed * T_J.inverse(), poseFromVector(res.nu));
+    sum_t += err.translation_m, sum_r += err.rotation_deg;
+    // The naive (JᵀWJ)⁻¹ at the same estimate: every line taken for an independent observation.
+    const IconicError at = iconicError(map_i.map, mapper, res.nu, true, 0.0, nullptr, 1, true);
+    const double naive = nees(e, at.JtJ.ldlt().solve(Matrix6d::Identity()));
+    sum_naive += naive;
+    // Without map 1's image: its lines taken to share pixels as their crossings with image 2 do.
+    const double c = options.robust_sigmas;  // the loss's final scale, 3 σ
+    const double alike = nees(e, weightedCovariance(map_i.map, mapper, res.nu, c, referenceNormals(map_i.map), nullptr));
+    sum_alike += alike;
+    if (k % 5 == 0) {  // the unweighted LM on every fifth pair, for docs/matching.md
+      const IconicResult lm = iconicLevenbergMarquardt(map_i.map, mapper, PoseVector::Zero());
+      const PoseError err_lm = poseError(believed * T_J.inverse(), poseFromVector(lm.nu));
+      sum_lm += nees(lm.nu - truth, lm.covariance);
+      sum_t_lm += err_lm.translation_m, sum_r_lm += err_lm.rotation_deg;
+      ++lm_trials;
+    }
+    std::printf("trial %2d: NEES %6.2f (without image 1: %6.2f; naive %7.1f), error %.4f m %.4f deg, %d iterations, "
+                "%ld lines\n", k, n, alike, naive, err.translation_m, err.rotation_deg, res.iterations, res.overlap);
+  }
+  const double mean = sum_weighted / kTrials;
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("weighted: mean NEES %.2f (without image 1: %.2f; naive (JtWJ)^-1: %.1f), mean error %.4f m %.4f deg "
+              "over %d pairs\n", mean, sum_alike / kTrials, sum_naive / kTrials, sum_t / kTrials, sum_r / kTrials, kTrials);
+  std::printf("unweighted LM: mean NEES %.2f, mean error %.4f m %.4f deg over %d pairs; %.1f s\n", sum_lm / lm_trials,
+              sum_t_lm / lm_trials, sum_r_lm / lm_trials, lm_trials, seconds);
+  EXPECT_GE(mean, 4.5);
+  EXPECT_LE(mean, 7.5);
+  EXPECT_GT(sum_naive / kTrials, 7.5);  // what the correction is for: without it the test fails
+}
+
+}  // namespace
+}  // namespace ambler::perception
