@@ -26,6 +26,7 @@ nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
   writeJson(state.out / "metrics.json", metrics);
   state.say("wrote     " + (state.out / "metrics.json").string() + ", " + (state.out / "terrain.png").string() +
             ", " + (state.out / "scans").string() + "/, " + (sc.map ? (state.out / "maps").string() + "/, " : std::string()) +
+            (sc.matching ? (state.out / "matching").string() + "/, " : std::string()) +
             (state.out / "world").string() + "/");
   return metrics;
 }

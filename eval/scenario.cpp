@@ -275,7 +275,8 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
       else if (name == "iconic") m.methods.push_back(MatchMethod::Iconic);
       else if (name == "features+iconic") m.methods.push_back(MatchMethod::FeaturesIconic);
       else if (name == "iconic_lm") m.methods.push_back(MatchMethod::IconicLm);
-      else reader.fail(path, std::string(name) + " is not built yet (built: features, iconic, features+iconic, iconic_lm)");
+      else if (name == "iconic_weighted") m.methods.push_back(MatchMethod::IconicWeighted);
+      else reader.fail(path, std::string(name) + " is a registration peer, not built yet (built: features, iconic, features+iconic, iconic_lm, iconic_weighted)");
     }
   }
   if (const auto e = f.get("initial_error")) {

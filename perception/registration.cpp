@@ -16,7 +16,8 @@ MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, con
 
 RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& image_j,
                                  const Raster<std::uint8_t>* edges_j, const MapGrid& grid_j,
-                                 RegistrationMethod method, const RegistrationConfig& config) {
+                                 RegistrationMethod method, const RegistrationConfig& config,
+                                 const LocusMapper* map_i_source) {
   if (!map_i.grid().inWorldFrame()) throw std::invalid_argument("registerViews: map I is not in the world frame");
   RegistrationResult out;
   const LocusMapper mapper(image_j, edges_j, config.locus);
@@ -51,8 +52,12 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
     case RegistrationMethod::IconicLm:
       out.iconic = iconicLevenbergMarquardt(map_i, mapper, nu0, config.iconic);
       break;
-    case RegistrationMethod::IconicWeighted:
-      throw std::invalid_argument("registerViews: iconic_weighted is not built yet");
+    case RegistrationMethod::IconicWeighted: {
+      IconicOptions options = config.iconic;
+      options.map1_source = map_i_source;
+      out.iconic = iconicWeighted(map_i, mapper, nu0, options);
+      break;
+    }
     case RegistrationMethod::Features:
       break;
   }

@@ -55,9 +55,12 @@ MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, con
 // estimate ν maps map I's frame to the frame image J's believed pose lives in; the corrected pose
 // of sensor J is poseFromVector(ν)⁻¹·believed. Feature matching builds map J on grid_j (in the
 // believed world; see believedGrid). Map I must be in the world frame (its grid's T_WM the
-// identity). Throws std::invalid_argument otherwise.
+// identity). map_i_source, if given, is the locus mapper map I was made with (image I and its
+// edges): the weighted method's covariance then counts the pixels map I's lines share
+// (IconicOptions::map1_source). Throws std::invalid_argument otherwise.
 RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& image_j,
                                  const Raster<std::uint8_t>* edges_j, const MapGrid& grid_j,
-                                 RegistrationMethod method, const RegistrationConfig& config);
+                                 RegistrationMethod method, const RegistrationConfig& config,
+                                 const LocusMapper* map_i_source = nullptr);
 
 }  // namespace ambler::perception

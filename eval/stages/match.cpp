@@ -5,7 +5,9 @@
 // the world to the rover's believed world of view J, and with it the pose of sensor J; nothing a
 // method sees depends on the true pose of J. matching/pair_I_J_METHOD.json and metrics.registration;
 // pictures of the views' features, the pair's maps before and after, and the methods' residuals.
+#include <algorithm>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 #include "eval/io.hpp"
@@ -107,10 +109,16 @@ void run(RunState& s) {
     const perception::ElevationMap& map_i = vi.locus->map;
     const perception::MapGrid grid_j = perception::believedGrid(map_i.grid(), vi.T_WS, believed_WS);
     std::vector<Registered> registered;
+    // The mapper map I was made with, for the weighted method's covariance (the pixels of image I
+    // that map I's lines share).
+    std::optional<perception::LocusMapper> source_i;
+    if (std::find(spec.methods.begin(), spec.methods.end(), MatchMethod::IconicWeighted) != spec.methods.end())
+      source_i.emplace(vi.locus->image, vi.locus->edges ? &*vi.locus->edges : nullptr, config.locus);
     for (const MatchMethod method : spec.methods) {
       Stopwatch t;
       const perception::RegistrationResult reg = perception::registerViews(
-          map_i, image, vj.locus->edges ? &*vj.locus->edges : nullptr, grid_j, method, config);
+          map_i, image, vj.locus->edges ? &*vj.locus->edges : nullptr, grid_j, method, config,
+          source_i ? &*source_i : nullptr);
       const perception::IconicResult& res = reg.iconic;
       const double seconds = t.seconds();
       s.addTime("match", seconds);

@@ -35,7 +35,7 @@ map:
   region: {x_m: [-5, 5], y_m: [-3, 8]}
   baseline: none
 matching:
-  methods: [features, features+iconic, iconic, iconic_lm]
+  methods: [features, features+iconic, iconic, iconic_lm, iconic_weighted]
   initial_error: )" + initial_error + "\n";
 }
 
@@ -44,7 +44,7 @@ TEST(Matching, EveryMethodRecoversTheRelativePose) {
     const Scenario sc = parseScenario(scenario(noisy), "inline.yaml");
     test::TempDir run;
     const auto metrics = runScenario(sc, {run.dir, false});
-    ASSERT_EQ(metrics["registration"].size(), 4u);
+    ASSERT_EQ(metrics["registration"].size(), 5u);
     for (const auto& m : metrics["registration"]) {
       const std::string method = m["method"].get<std::string>();
       const double t = m["translation_error_m"].get<double>(), r = m["rotation_error_deg"].get<double>();
