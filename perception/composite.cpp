@@ -1,0 +1,84 @@
+#include "perception/composite.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace ambler::perception {
+
+namespace {
+
+bool sameGrid(const MapGrid& a, const MapGrid& b) {
+  return a.rows == b.rows && a.cols == b.cols && a.cell == b.cell && a.x_min == b.x_min && a.y_max == b.y_max &&
+         a.T_WM.isApprox(b.T_WM, 0.0);
+}
+
+}  // namespace
+
+void mergeInto(ElevationMap& composite, const ElevationMap& map) {
+  if (!sameGrid(composite.grid(), map.grid())) throw std::invalid_argument("mergeInto: the maps' grids differ");
+  const MapGrid& g = map.grid();
+  for (int r = 0; r < g.rows; ++r)
+    for (int c = 0; c < g.cols; ++c) {
+      const CellState a = composite.stateAt(r, c), b = map.stateAt(r, c);
+      if (b == CellState::Known) {
+        const double z2 = map.elevation()(r, c), s2 = map.sigma()(r, c);
+        if (a != CellState::Known) {
+          composite.setKnown(r, c, float(z2), float(s2));
+          continue;
+        }
+        const double z1 = composite.elevation()(r, c), s1 = composite.sigma()(r, c);
+        const double v1 = s1 * s1, v2 = s2 * s2;
+        if (v1 + v2 > 0) {
+          composite.setKnown(r, c, float((v2 * z1 + v1 * z2) / (v1 + v2)), float(std::sqrt(v1 * v2 / (v1 + v2))));
+        } else {
+          composite.setKnown(r, c, float(0.5 * (z1 + z2)), 0.f);
+        }
+      } else if (b == CellState::Shadow && a != CellState::Known) {
+        const float cb = map.shadowCeiling()(r, c);
+        if (a == CellState::Shadow) {
+          const float ca = composite.shadowCeiling()(r, c);
+          composite.setShadow(r, c, std::isnan(ca) ? cb : std::isnan(cb) ? ca : std::min(ca, cb));
+        } else {
+          composite.setShadow(r, c, cb);
+        }
+      }
+    }
+}
+
+Raster<float> registrationSigma(const ElevationMap& map, const PoseVector& nu, const Matrix6d& P) {
+  const MapGrid& g = map.grid();
+  Raster<float> out = Raster<float>::Constant(g.rows, g.cols, std::numeric_limits<float>::quiet_NaN());
+  const Eigen::Isometry3d T = poseFromVector(nu);
+  const Eigen::Matrix3d R = T.linear();
+  Eigen::Matrix3d dRt_R[3];
+  for (int k = 0; k < 3; ++k) dRt_R[k] = rotationDerivative(nu.head<3>(), k).transpose() * R;
+  const std::vector<Eigen::Vector3d> normals = referenceNormals(map);
+  for (int r = 0; r < g.rows; ++r)
+    for (int c = 0; c < g.cols; ++c) {
+      if (map.stateAt(r, c) != CellState::Known) continue;
+      Eigen::Vector3d n = normals[std::size_t(r) * g.cols + c];
+      if (!n.allFinite()) n = Eigen::Vector3d::UnitZ();  // no neighbours to take a slope from: level
+      const Eigen::Vector2d xy = g.center(r, c);
+      const Eigen::Vector3d p(xy.x(), xy.y(), map.elevation()(r, c));
+      Eigen::Matrix<double, 1, 6> J;
+      for (int k = 0; k < 3; ++k) J(k) = n.dot(dRt_R[k] * p);
+      J.tail<3>() = -(R * n).transpose();  // nᵀ·(−Rᵀ) = −(R·n)ᵀ
+      J /= n.z();
+      out(r, c) = float(std::sqrt(std::max(0.0, double(J * P * J.transpose()))));
+    }
+  return out;
+}
+
+void addSigma(ElevationMap& map, const Raster<float>& extra) {
+  const MapGrid& g = map.grid();
+  if (extra.rows() != g.rows || extra.cols() != g.cols) throw std::invalid_argument("addSigma: sizes differ");
+  for (int r = 0; r < g.rows; ++r)
+    for (int c = 0; c < g.cols; ++c) {
+      const float e = extra(r, c);
+      if (map.stateAt(r, c) != CellState::Known || std::isnan(e)) continue;
+      const float s = map.sigma()(r, c);
+      map.sigma()(r, c) = std::sqrt(s * s + e * e);
+    }
+}
+
+}  // namespace ambler::perception

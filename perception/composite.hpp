@@ -1,0 +1,37 @@
+#pragma once
+// Composite maps (paper §4.3): maps of several views on one grid merged by the maximum-likelihood
+// rule (eq. 9), and the σ a registration's uncertainty adds to a map (docs/composite.md).
+// Onboard code: the poses are the rover's (matched) or whatever the caller gives.
+#include <vector>
+
+#include "perception/elevation_map.hpp"
+#include "perception/iconic.hpp"
+#include "perception/rigid_transform.hpp"
+
+namespace ambler::perception {
+
+// Merges `map` into `composite` (the same grid), cell by cell:
+// - both Known: eq. 9, z = (σ₂²·z₁ + σ₁²·z₂)/(σ₁² + σ₂²), the ML estimate of two independent
+//   Gaussian measurements, and its σ² = σ₁²·σ₂²/(σ₁² + σ₂²) (σ of 0, ground truth, wins outright;
+//   two of 0 average);
+// - one Known: that one (a measurement beats a shadow or nothing);
+// - both Shadow: Shadow under the lower ceiling (each says the terrain lies below its own; NaN
+//   ceilings say nothing);
+// - Shadow and Unseen: the Shadow; both Unseen: Unseen.
+// Throws std::invalid_argument if the grids differ.
+void mergeInto(ElevationMap& composite, const ElevationMap& map);
+
+// The σ that an uncertain pose adds to each Known cell of `map` (NaN elsewhere). The map was
+// built from a view whose sensor pose the rover corrected by ν (S = exp(ν)⁻¹·B, registerViews'
+// convention, B the believed pose) and ν has covariance P (rx, ry, rz, tx, ty, tz). A point the
+// view saw at q (believed frame) lands at p(ν) = Rᵀ·(q − t); to first order a perturbation δ of ν
+// moves it by A(p)·δ, A = [∂Rᵀ/∂r_k·R·p (k = 0..2), −Rᵀ], and the surface (upward normal n, from
+// the map's own slopes) moves vertically by nᵀ·A·δ/n_z, so σ² = nᵀ·A·P·Aᵀ·n/n_z² per cell. p is
+// the cell's centre at its elevation, in the map frame (the world for the composite's maps).
+Raster<float> registrationSigma(const ElevationMap& map, const PoseVector& nu, const Matrix6d& P);
+
+// σ_z of every Known cell of `map` grown by `extra` in quadrature (√(σ² + extra²); NaN extra
+// leaves a cell alone). Throws std::invalid_argument if the sizes differ.
+void addSigma(ElevationMap& map, const Raster<float>& extra);
+
+}  // namespace ambler::perception
