@@ -189,4 +189,22 @@ nlohmann::ordered_json cartesianJson(const MapMetrics& m, int view) {
   return j;
 }
 
+nlohmann::ordered_json compositeJson(const MapMetrics& m, int views, const char* poses) {
+  nlohmann::ordered_json j;
+  j["views"] = views;
+  j["poses"] = poses;
+  j["cells"] = m.cells;
+  j["coverage"] = number(m.coverage);
+  j["rms_error_m"] = number(m.rms_error_m);
+  j["median_abs_error_m"] = number(m.median_abs_error_m);
+  j["within_1sigma"] = number(m.within_1sigma);
+  j["within_2sigma"] = number(m.within_2sigma);
+  j["known"] = m.known;
+  j["shadow"] = m.shadow;
+  j["compared"] = m.compared;
+  j["p95_abs_error_m"] = number(m.p95_abs_error_m);
+  j["max_abs_error_m"] = number(m.max_abs_error_m);
+  return j;
+}
+
 }  // namespace ambler::eval

@@ -76,4 +76,9 @@ nlohmann::ordered_json toJson(const MapMetrics& m, int view);
 // above when there are bands. NaN → null.
 nlohmann::ordered_json cartesianJson(const MapMetrics& m, int view);
 
+// The "composite" entry (merge stage): views, poses, cells, coverage, rms_error_m,
+// median_abs_error_m, within_1sigma, within_2sigma, then known, shadow, compared,
+// p95_abs_error_m, max_abs_error_m. NaN → null.
+nlohmann::ordered_json compositeJson(const MapMetrics& m, int views, const char* poses);
+
 }  // namespace ambler::eval

@@ -14,6 +14,7 @@
 
 #include "eval/scenario.hpp"
 #include "perception/elevation_map.hpp"
+#include "perception/registration.hpp"
 #include "perception/scan_to_map.hpp"
 #include "sim/erim_scanner.hpp"
 #include "sim/ground_truth.hpp"
@@ -41,6 +42,15 @@ struct ViewState {
   std::optional<perception::ScanMap> locus;                 // map stage: the locus map
 };
 
+// One registration's estimate (match stage), for the stages after it.
+struct PairEstimate {
+  int i = 0, j = 0;
+  MatchMethod method = MatchMethod::IconicLm;
+  Eigen::Isometry3d T_IJ = Eigen::Isometry3d::Identity();  // sensor J in sensor I's frame, estimated
+  perception::PoseVector nu = perception::PoseVector::Zero();  // the correction (registerViews' ν)
+  std::optional<perception::Matrix6d> covariance;             // of ν, when the method gives one
+};
+
 struct RunState {
   const Scenario& scenario;
   std::filesystem::path out;
@@ -50,6 +60,7 @@ struct RunState {
   std::unique_ptr<sim::RayScene> scene;
   std::unique_ptr<sim::GroundTruth> truth;
   std::vector<ViewState> views;      // one per scenario view
+  std::vector<PairEstimate> estimates;  // match stage: per pair and method, in run order
 
   nlohmann::ordered_json metrics;    // metrics.json; stages add their keys in stage order
   nlohmann::ordered_json timing;     // metrics.json's timing_s: seconds per stage

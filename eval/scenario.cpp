@@ -220,13 +220,11 @@ std::vector<ViewSpec> readViews(const Reader& reader, const YAML::Node& node) {
   return views;
 }
 
-MapSpec readMap(const Reader& reader, const YAML::Node& node) {
-  const Fields f(reader, node, "map", {"cell_m", "region", "epsilon_rad", "shadows", "baseline"});
-  MapSpec m;
-  m.cell_m = f.number("cell_m", kPositive, m.cell_m);
+// A section's `region: {x_m: [lo, hi], y_m: [lo, hi]}` into x_m, y_m (kept where absent).
+void readRegion(const Reader& reader, const Fields& f, Eigen::Vector2d& x_m, Eigen::Vector2d& y_m) {
   if (const auto node_r = f.get("region")) {
     const Fields r(reader, *node_r, f.pathOf("region"), {"x_m", "y_m"});
-    for (const auto& [key, bounds] : {std::pair{"x_m", &m.x_m}, std::pair{"y_m", &m.y_m}}) {
+    for (const auto& [key, bounds] : {std::pair{"x_m", &x_m}, std::pair{"y_m", &y_m}}) {
       if (const auto lohi = r.numbers<2>(key, kAny)) {
         if (!((*lohi)[0] < (*lohi)[1])) {
           reader.fail(r.pathOf(key), "expected [lo, hi] with lo < hi, got [" +
@@ -236,6 +234,13 @@ MapSpec readMap(const Reader& reader, const YAML::Node& node) {
       }
     }
   }
+}
+
+MapSpec readMap(const Reader& reader, const YAML::Node& node) {
+  const Fields f(reader, node, "map", {"cell_m", "region", "epsilon_rad", "shadows", "baseline"});
+  MapSpec m;
+  m.cell_m = f.number("cell_m", kPositive, m.cell_m);
+  readRegion(reader, f, m.x_m, m.y_m);
   checkGridSize(reader, f.pathOf("cell_m"), std::ceil((m.x_m[1] - m.x_m[0]) / m.cell_m),
                 std::ceil((m.y_m[1] - m.y_m[0]) / m.cell_m));
   m.epsilon_rad = f.number("epsilon_rad", kPositive, m.epsilon_rad);
@@ -294,9 +299,39 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
   return m;
 }
 
+MergeSpec readMerge(const Reader& reader, const YAML::Node& node, const Scenario& s) {
+  if (s.views.size() < 2)
+    reader.fail("merge", "needs at least two views, the scenario has " + std::to_string(s.views.size()));
+  const Fields f(reader, node, "merge", {"poses", "cell_m", "region"});
+  MergeSpec m;
+  m.poses = f.choice("poses", {"matched", "true"}, "matched") == "matched" ? MergePoses::Matched : MergePoses::True;
+  m.cell_m = f.number("cell_m", kPositive, s.map->cell_m);
+  m.x_m = s.map->x_m;
+  m.y_m = s.map->y_m;
+  readRegion(reader, f, m.x_m, m.y_m);
+  checkGridSize(reader, f.pathOf("cell_m"), std::ceil((m.x_m[1] - m.x_m[0]) / m.cell_m),
+                std::ceil((m.y_m[1] - m.y_m[0]) / m.cell_m));
+  if (m.poses == MergePoses::Matched) {
+    if (!s.matching) reader.fail("merge.poses", "matched needs a matching section (or poses: true)");
+    // Every view must be reachable from view 0 through the matched pairs.
+    std::vector<char> placed(s.views.size(), 0);
+    placed[0] = 1;
+    for (bool grew = true; grew;) {
+      grew = false;
+      for (const auto& [i, j] : s.matching->pairs)
+        if (placed[i] != placed[j]) placed[i] = placed[j] = 1, grew = true;
+    }
+    for (std::size_t k = 0; k < placed.size(); ++k)
+      if (!placed[k])
+        reader.fail("merge.poses", "matched, but view " + std::to_string(k) +
+                                       " is not linked to view 0 by matching.pairs");
+  }
+  return m;
+}
+
 Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::path& file) {
   const Fields f(reader, root, "",
-                 {"name", "description", "seed", "terrain", "sensor", "views", "map", "matching"});
+                 {"name", "description", "seed", "terrain", "sensor", "views", "map", "matching", "merge"});
   Scenario s;
   s.file = file;
   s.name = reader.string(f.required("name"), "name");
@@ -320,11 +355,19 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
     if (!s.map) reader.fail("matching", "needs a map section: the views are matched through their maps");
     s.matching = readMatching(reader, *node, int(s.views.size()));
   }
+  if (const auto node = f.get("merge")) {
+    if (!s.map) reader.fail("merge", "needs a map section: the composite is made of the views' maps");
+    s.merge = readMerge(reader, *node, s);
+  }
   return s;
 }
 
 }  // namespace
 
+const char* mergePosesName(MergePoses p) { return p == MergePoses::Matched ? "matched" : "true"; }
+perception::MapGrid MergeSpec::grid() const {
+  return perception::MapGrid::covering(x_m[0], x_m[1], y_m[0], y_m[1], cell_m);
+}
 const char* shadowsName(perception::ShadowMethod m) { return m == perception::ShadowMethod::Gnc ? "gnc" : "none"; }
 const char* baselineName(Baseline b) { return b == Baseline::Cartesian ? "cartesian" : "none"; }
 const char* matchMethodName(MatchMethod m) {

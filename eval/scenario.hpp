@@ -68,6 +68,22 @@ struct MatchingSpec {
   Eigen::Isometry3d initialEstimate(const Eigen::Isometry3d& T_IJ) const;
 };
 
+// The composite map (docs/scenario.md, "merge"): every view's scan mapped on one grid at its pose
+// and merged by eq. 9.
+enum class MergePoses : std::uint8_t {
+  Matched,  // each view placed by the first listed matching method's estimates, chained from view 0
+  True,     // the true poses: mapping error alone
+};
+const char* mergePosesName(MergePoses p);
+
+struct MergeSpec {
+  MergePoses poses = MergePoses::Matched;
+  double cell_m = 0.10;              // default: map.cell_m
+  Eigen::Vector2d x_m{-5.0, 5.0};    // default: map.region
+  Eigen::Vector2d y_m{-3.0, 8.0};
+  perception::MapGrid grid() const;  // in view 0's world frame
+};
+
 struct Scenario {
   std::filesystem::path file;       // where it was loaded from (for messages and relative paths)
   std::string name;
@@ -78,6 +94,7 @@ struct Scenario {
   std::vector<ViewSpec> views;
   std::optional<MapSpec> map;       // absent: no maps
   std::optional<MatchingSpec> matching;  // absent: no registration
+  std::optional<MergeSpec> merge;        // absent: no composite
 };
 
 // What the matchers are told (docs/matching.md): the locus settings and sensor model of the map

@@ -174,6 +174,13 @@ std::string resolvedYaml(const Scenario& s) {
     y += "  success: {translation_m: " + num(m.success_translation_m) + ", rotation_deg: " +
          num(m.success_rotation_deg) + "}\n";
   }
+  if (s.merge) {
+    const auto& m = *s.merge;
+    y += std::string("merge:\n  poses: ") + mergePosesName(m.poses) + "\n";
+    y += "  cell_m: " + num(m.cell_m) + "\n";
+    y += "  region: {x_m: " + list({num(m.x_m[0]), num(m.x_m[1])}) + ", y_m: " + list({num(m.y_m[0]), num(m.y_m[1])}) +
+         "}\n";
+  }
   return y;
 }
 

@@ -22,6 +22,7 @@ const std::vector<Stage>& runStages() {
       stages::map(),
       stages::cartesian(),
       stages::match(),
+      stages::merge(),
   };
   return all;
 }

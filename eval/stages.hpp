@@ -24,6 +24,7 @@ Stage scan();       // one ERIM scan per view; scans/
 Stage map();        // the locus map of each scan, scored; maps/
 Stage cartesian();  // the Cartesian baseline of each scan, scored; maps/
 Stage match();      // each pair of views registered by each method, scored; matching/
+Stage merge();      // the composite map of every view, scored; maps/composite_*
 }  // namespace stages
 
 }  // namespace ambler::eval

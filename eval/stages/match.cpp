@@ -182,6 +182,9 @@ void run(RunState& s) {
       pair["trace"] = trace;
       writeJson(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + methodFileName(name) + ".json"), pair);
       registered.push_back({name, perception::poseFromVector(reg.nu).inverse() * believed_WS, res.rms_m});
+      PairEstimate estimate{i, j, method, T_est, reg.nu, std::nullopt};
+      if (covariance && res.covariance.allFinite()) estimate.covariance = res.covariance;
+      s.estimates.push_back(estimate);
       nlohmann::ordered_json m;
       m["pair"] = {i, j};
       m["method"] = name;

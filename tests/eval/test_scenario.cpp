@@ -492,7 +492,7 @@ TEST(ScenarioErrors, UnknownKeysEverywhere) {
   expectError(kMinimal + "map: {region: {x_m: [0, 1], z_m: [0, 1]}}\n", "map.region.z_m",
               "unknown key");
   expectError(kMinimal + "colour: red\n", "colour",
-              "unknown key (allowed: name, description, seed, terrain, sensor, views, map, matching)");
+              "unknown key (allowed: name, description, seed, terrain, sensor, views, map, matching, merge)");
   expectError(
       "name: t\nterrain: {kind: plane, rocks: {abundance: 0.1}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
       "terrain.rocks.abundance", "did you mean abundance_k?");
@@ -703,6 +703,36 @@ TEST(ScenarioMatching, RefusesBadInput) {
   expectError(kMinimal + "map: {}\nmatching: {}\n", "matching", "at least two views");
   expectError("name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}, {xyz_m: [1, 0, 1]}]\nmatching: {}\n",
               "matching", "needs a map section");
+}
+
+// merge: {} takes the map's grid and matched poses; every key read back bit for bit.
+TEST(ScenarioMerge, DefaultsAndRoundTrip) {
+  const Scenario d = parseScenario(kThreeViews + "matching: {}\nmerge: {}\n", kFile);
+  ASSERT_TRUE(d.merge.has_value());
+  EXPECT_EQ(d.merge->poses, MergePoses::Matched);
+  EXPECT_EQ(d.merge->cell_m, d.map->cell_m);
+  EXPECT_EQ(d.merge->x_m, d.map->x_m);
+  EXPECT_EQ(d.merge->y_m, d.map->y_m);
+  const Scenario full = parseScenario(kThreeViews + "merge: {poses: true, cell_m: 0.2, region: {x_m: [-1, 2], y_m: [0, 3]}}\n", kFile);
+  EXPECT_EQ(full.merge->poses, MergePoses::True);
+  EXPECT_EQ(full.merge->cell_m, 0.2);
+  EXPECT_EQ(full.merge->x_m, Eigen::Vector2d(-1, 2));
+  const Scenario back = parseScenario(resolvedYaml(full), kFile);
+  ASSERT_TRUE(back.merge.has_value());
+  EXPECT_EQ(back.merge->poses, full.merge->poses);
+  EXPECT_EQ(back.merge->cell_m, full.merge->cell_m);
+  EXPECT_EQ(back.merge->x_m, full.merge->x_m);
+  EXPECT_EQ(back.merge->y_m, full.merge->y_m);
+}
+
+TEST(ScenarioMerge, RefusesBadInput) {
+  expectError(kMinimal + "map: {}\nmerge: {poses: true}\n", "merge", "at least two views");
+  expectError(kThreeViews + "merge: {}\n", "merge.poses", "needs a matching section");
+  expectError(kThreeViews + "matching: {pairs: [[0, 1]]}\nmerge: {}\n", "merge.poses", "view 2 is not linked to view 0");
+  expectError(kThreeViews + "merge: {poses: guessed}\n", "merge.poses", "matched");
+  expectError(kThreeViews + "merge: {poses: true, cell_m: -1}\n", "merge.cell_m", "> 0");
+  expectError("name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}, {xyz_m: [1, 0, 1]}]\nmerge: {poses: true}\n",
+              "merge", "needs a map section");
 }
 
 }  // namespace
