@@ -235,13 +235,10 @@ TEST(Run, SameSeedGivesByteIdenticalFiles) {
 }
 
 
-// The match stage end to end: two views of Mars-like ground with rocks, the ERIM's noise,
-// quantisation and mixed pixels, view 1 believed 0.3 m and 3° off. Each method's file and
-// registration entry are written; T_true is the views' relative pose; both iconic methods land
-// within the matching issue's bound for a noisy sensor (5 cm and 0.5°), far inside the start.
-TEST(Run, MatchStageRegistersTheViewsAgainstTheTruePose) {
-  const std::string yaml = R"(
-name: match_test
+// Two views of Mars-like ground with rocks and craters, 16 m square, mapped at 10 cm: view 0 at
+// (0, −6, 3) looking 30° down along +y, view 1 at the pose `view1` ("[x, y, z], rpy_deg: [...]").
+std::string twoViews(const std::string& name, const std::string& view1) {
+  return "name: " + name + R"(
 seed: 5
 terrain:
   kind: mars
@@ -251,12 +248,20 @@ terrain:
   craters: {count: 3, min_diameter_m: 1.0, max_diameter_m: 4.0}
 views:
   - {xyz_m: [0, -6, 3.0], rpy_deg: [0, -30, 0]}
-  - {xyz_m: [0, -5, 3.0], rpy_deg: [0, -30, 5]}
+  - {xyz_m: )" + view1 + R"(}
 map:
   cell_m: 0.10
   region: {x_m: [-4, 4], y_m: [-3, 6]}
   baseline: none
-matching:
+)";
+}
+
+// The match stage end to end: two views of Mars-like ground with rocks, the ERIM's noise,
+// quantisation and mixed pixels, view 1 believed 0.3 m and 3° off. Each method's file and
+// registration entry are written; T_true is the views' relative pose; both iconic methods land
+// within the matching issue's bound for a noisy sensor (5 cm and 0.5°), far inside the start.
+TEST(Run, MatchStageRegistersTheViewsAgainstTheTruePose) {
+  const std::string yaml = twoViews("match_test", "[0, -5, 3.0], rpy_deg: [0, -30, 5]") + R"(matching:
   methods: [iconic, iconic_lm]
   initial_error: {xyz_m: [0.2, -0.2, 0.05], rpy_deg: [0, 0, 3]}
 )";
@@ -293,22 +298,7 @@ matching:
 // composite has that view's elevation, where both do eq. 9's. With matched poses the composite
 // exists and its metrics are filled.
 TEST(Run, MergeStageComposesTheViewsMaps) {
-  const std::string base = R"(
-name: merge_test
-seed: 5
-terrain:
-  kind: mars
-  size_m: [16, 16]
-  cell_m: 0.05
-  rocks: {abundance_k: 0.08, min_diameter_m: 0.1, max_diameter_m: 1.0}
-views:
-  - {xyz_m: [0, -6, 3.0], rpy_deg: [0, -30, 0]}
-  - {xyz_m: [0.5, -5, 3.0], rpy_deg: [0, -30, 8]}
-map:
-  cell_m: 0.10
-  region: {x_m: [-4, 4], y_m: [-3, 6]}
-  baseline: none
-matching:
+  const std::string base = twoViews("merge_test", "[0.5, -5, 3.0], rpy_deg: [0, -30, 8]") + R"(matching:
   methods: [iconic_weighted]
   initial_error: {xyz_m: [0.2, -0.2, 0.0], rpy_deg: [0, 0, 3]}
 )";
