@@ -351,6 +351,11 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
 
 namespace {
 
+// weightedCovariance with each line's search started at its hint (one per cell of map 1).
+Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
+                             const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source,
+                             std::vector<int>* hints);
+
 // LM on the plain residuals (weighted = false) or on r/σ; `c_final` receives the loss's last scale.
 // hints: one per cell of map 1 (−1 at first), each line's last bracket, for the caller's last
 // evaluation too.
@@ -462,7 +467,8 @@ IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2,
   const Degeneracy d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell));
   res.degenerate = d.degenerate;
   res.free_directions = d.free_directions;
-  if (e.overlap > 6 && !d.degenerate) res.covariance = weightedCovariance(map1, image2, res.nu, c, normals, options.map1_source);
+  if (e.overlap > 6 && !d.degenerate)
+    res.covariance = covarianceWithHints(map1, image2, res.nu, c, normals, options.map1_source, &hints);
   else res.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
   return res;
 }
@@ -505,6 +511,14 @@ struct LineShare {
 
 Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
                             const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source) {
+  return covarianceWithHints(map1, image2, nu, c, reference_normals, map1_source, nullptr);
+}
+
+namespace {
+
+Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
+                             const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source,
+                             std::vector<int>* hints) {
   const MapGrid& grid = map1.grid();
   const LineModel model(nu, true);
   std::vector<std::vector<LineShare>> rows(grid.rows);
@@ -514,7 +528,8 @@ Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2,
       for (int col = 0; col < grid.cols; ++col) {
         LineTerm l;
         PoseVector J;
-        if (!model.residual(map1, image2, r, col, true, l) ||
+        int* hint = hints ? &(*hints)[std::size_t(r) * grid.cols + col] : nullptr;
+        if (!model.residual(map1, image2, r, col, true, l, hint) ||
             !model.jacobian(image2, &reference_normals, long(r) * grid.cols + col, l, J))
           continue;
         const double w = c > 0 ? 1.0 / (1.0 + l.u * l.u / (c * c)) : 1.0;
@@ -553,6 +568,8 @@ Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2,
   const Matrix6d Hinv = H.ldlt().solve(Matrix6d::Identity());
   return Hinv * S * Hinv;
 }
+
+}  // namespace
 
 IconicResult registerIconic(const ElevationMap& map_i, const RangeImage& image_j, const Raster<std::uint8_t>* edges_j,
                             const LocusConfig& config, IconicMethod method, const IconicOptions& options) {
