@@ -53,11 +53,13 @@ struct LineModel {
       for (int k = 0; k < 3; ++k) dR[k] = rotationDerivative(nu.head<3>(), k);
   }
   // False where map 1's cell or image 2's crossing is not Known.
-  bool residual(const ElevationMap& map1, const LocusMapper& image2, int r, int c, bool weighted, LineTerm& l) const {
+  // hint: where this line's search starts (a bracket found before), updated; may be null.
+  bool residual(const ElevationMap& map1, const LocusMapper& image2, int r, int c, bool weighted, LineTerm& l,
+                int* hint = nullptr) const {
     if (map1.stateAt(r, c) != CellState::Known) return false;
     const Eigen::Vector2d xy = map1.grid().center(r, c);
     l.base = Eigen::Vector3d(xy.x(), xy.y(), 0.0);
-    l.hit = image2.intersect(R * l.base + t, R * v);
+    l.hit = image2.intersect(R * l.base + t, R * v, hint);
     if (l.hit.state != CellState::Known) return false;
     // g = T⁻¹·f₂ = u + s·v: f₁ − g is (z₁ − s)·v.
     l.diff = double(map1.elevation()(r, c)) - l.hit.s;
@@ -84,7 +86,6 @@ struct LineModel {
   }
 };
 
-double meanSquare(const IconicError& e) { return e.overlap ? e.E / double(e.overlap) : 0.0; }
 double rms(const IconicError& e) { return e.overlap ? std::sqrt(e.sum_r2 / double(e.overlap)) : 0.0; }
 double rmsNormalized(const IconicError& e) { return e.overlap ? std::sqrt(e.sum_u2 / double(e.overlap)) : 0.0; }
 
@@ -113,8 +114,8 @@ Eigen::Vector3d knownCentroid(const ElevationMap& map) {
   return n ? Eigen::Vector3d(sum / double(n)) : sum;
 }
 
-void finishResult(IconicResult& res, const ElevationMap& map1, const LocusMapper& image2) {
-  const IconicError e = iconicError(map1, image2, res.nu);
+// e: the plain error at the estimate, with image 2's normals (iconicError's defaults).
+void finishResult(IconicResult& res, const ElevationMap& map1, const IconicError& e) {
   res.overlap = e.overlap;
   // Rotations weigh as the motion they give at half the map's diagonal.
   const MapGrid& g = map1.grid();
@@ -196,43 +197,101 @@ std::vector<Eigen::Vector3d> referenceNormals(const ElevationMap& map) {
   return n;
 }
 
-IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, bool with_gradient,
-                        double cauchy_c, const std::vector<Eigen::Vector3d>* reference_normals, int stride,
-                        bool weighted) {
+namespace {
+
+// One line of an evaluation: its residual r, r/σ and the Jacobian of r/σ (has_J: the line does
+// not graze the surface; only with a gradient).
+struct LineSample {
+  int col;  // the cell's column (its row is the list's)
+  double diff, u;
+  PoseVector J;
+  bool has_J;
+};
+
+// An evaluation's lines per map row: what the searches found, from which E, its gradient and
+// JᵀWJ follow for any loss scale without meeting the lines with image 2 again (sumLines).
+struct LineSamples {
+  std::vector<std::vector<LineSample>> rows;
+};
+
+// hints (one per cell of map 1, −1: none), if given, start each line's search at the bracket its
+// last search found, and are updated: between nearby poses the bracket moves by a scanline or
+// none, and the walk down the line from its top is spared.
+LineSamples sampleLines(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, bool with_gradient,
+                        const std::vector<Eigen::Vector3d>* reference_normals, int stride, bool weighted,
+                        std::vector<int>* hints = nullptr) {
   const MapGrid& grid = map1.grid();
   const LineModel model(nu, with_gradient);
-  std::vector<RowSum> rows(grid.rows);
+  LineSamples out;
+  out.rows.resize(std::size_t(grid.rows));
   tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r) {
-      RowSum& sum = rows[r];
       if (r % stride != 0) continue;
+      std::vector<LineSample>& row = out.rows[std::size_t(r)];
       for (int c = 0; c < grid.cols; c += stride) {
         LineTerm l;
-        if (!model.residual(map1, image2, r, c, weighted, l)) continue;
-        const double w = cauchy_c > 0 ? 1.0 / (1.0 + l.u * l.u / (cauchy_c * cauchy_c)) : 1.0;
-        sum.E += cauchy_c > 0 ? cauchy_c * cauchy_c * std::log1p(l.u * l.u / (cauchy_c * cauchy_c)) : l.u * l.u;
-        sum.sum_r2 += l.diff * l.diff;
-        sum.sum_u2 += l.u * l.u;
-        ++sum.overlap;
-        if (!with_gradient) continue;
-        PoseVector J;
-        if (!model.jacobian(image2, reference_normals, r * grid.cols + c, l, J)) continue;
-        J /= l.sigma;  // the normalized residual's (σ = 1 unweighted)
-        sum.gradient += 2 * w * l.u * J;
-        sum.JtJ += w * J * J.transpose();
+        int* hint = hints ? &(*hints)[std::size_t(r) * grid.cols + c] : nullptr;
+        if (!model.residual(map1, image2, r, c, weighted, l, hint)) continue;
+        LineSample& sample = row.emplace_back();
+        sample.col = c, sample.diff = l.diff, sample.u = l.u;
+        sample.has_J = with_gradient && model.jacobian(image2, reference_normals, r * grid.cols + c, l, sample.J);
+        if (sample.has_J) sample.J /= l.sigma;  // the normalized residual's (σ = 1 unweighted)
       }
     }
   });
+  return out;
+}
+
+// E (robust with cauchy_c > 0), its gradient and JᵀWJ from an evaluation's lines, summed per row
+// and the rows in order: the same sums whatever the threads did.
+IconicError sumLines(const LineSamples& lines, double cauchy_c) {
   IconicError out;
-  for (const RowSum& s : rows) {  // in row order: the same sums whatever the threads did
-    out.E += s.E;
-    out.sum_r2 += s.sum_r2;
-    out.sum_u2 += s.sum_u2;
-    out.gradient += s.gradient;
-    out.JtJ += s.JtJ;
-    out.overlap += s.overlap;
+  for (const std::vector<LineSample>& row : lines.rows) {
+    RowSum sum;
+    for (const LineSample& l : row) {
+      const double w = cauchy_c > 0 ? 1.0 / (1.0 + l.u * l.u / (cauchy_c * cauchy_c)) : 1.0;
+      sum.E += cauchy_c > 0 ? cauchy_c * cauchy_c * std::log1p(l.u * l.u / (cauchy_c * cauchy_c)) : l.u * l.u;
+      sum.sum_r2 += l.diff * l.diff;
+      sum.sum_u2 += l.u * l.u;
+      ++sum.overlap;
+      if (!l.has_J) continue;
+      sum.gradient += 2 * w * l.u * l.J;
+      sum.JtJ += w * l.J * l.J.transpose();
+    }
+    out.E += sum.E;
+    out.sum_r2 += sum.sum_r2;
+    out.sum_u2 += sum.sum_u2;
+    out.gradient += sum.gradient;
+    out.JtJ += sum.JtJ;
+    out.overlap += sum.overlap;
   }
   return out;
+}
+
+// The cost (Cauchy scale c) of two evaluations over the lines both have: lines that enter or leave
+// the overlap between them do not decide which is lower.
+std::pair<double, double> commonCost(const LineSamples& a, const LineSamples& b, double c) {
+  const auto rho = [&](double u) { return c > 0 ? c * c * std::log1p(u * u / (c * c)) : u * u; };
+  double ea = 0, eb = 0;
+  for (std::size_t r = 0; r < a.rows.size(); ++r) {
+    const std::vector<LineSample>& ra = a.rows[r];
+    const std::vector<LineSample>& rb = b.rows[r];
+    std::size_t i = 0, j = 0;
+    while (i < ra.size() && j < rb.size()) {
+      if (ra[i].col < rb[j].col) ++i;
+      else if (rb[j].col < ra[i].col) ++j;
+      else ea += rho(ra[i++].u), eb += rho(rb[j++].u);
+    }
+  }
+  return {ea, eb};
+}
+
+}  // namespace
+
+IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, bool with_gradient,
+                        double cauchy_c, const std::vector<Eigen::Vector3d>* reference_normals, int stride,
+                        bool weighted) {
+  return sumLines(sampleLines(map1, image2, nu, with_gradient, reference_normals, stride, weighted), cauchy_c);
 }
 
 IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
@@ -243,11 +302,14 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
   const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
   const double c_noise = options.robust_sigmas * std::sqrt(2.0) * medianSigma(map1);
   const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
-  const auto eval = [&](const PoseVector& nu, double c) { return iconicError(map1, image2, nu, true, c, &normals); };
-  IconicError e = eval(res.nu, 0.0);
+  // The lines of the current estimate: E at a narrower loss is summed from them again, not searched.
+  std::vector<int> hints(std::size_t(map1.grid().cells()), -1);  // each line's last bracket
+  const auto sample = [&](const PoseVector& nu) { return sampleLines(map1, image2, nu, true, &normals, 1, false, &hints); };
+  LineSamples lines = sample(res.nu);
+  IconicError e = sumLines(lines, 0.0);
   res.rms_m.push_back(rms(e));
   double c = scale(e);
-  if (c > 0) e = eval(res.nu, c);
+  if (c > 0) e = sumLines(lines, c);
   // The gain K = A·diag(AᵀHA)⁻¹·Aᵀ: ν = A·μ, μ = (r, t′) with the rotation about the centroid of
   // map 1's known cells (t = t′ + centroid × r), so that a yaw does not drag a translation with it
   // through the map's far-away origin; each μ_i then steps on its own scale 1/(AᵀHA)_ii.
@@ -264,14 +326,16 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
     bool stepped = false;
     for (int halvings = 0; halvings < 40 && !stepped; ++halvings, k *= 0.5) {
       const PoseVector trial = res.nu - k * g;
-      const IconicError t = eval(trial, c);
-      if (t.overlap > 6 && meanSquare(t) < meanSquare(e)) {
-        const double decrease = (meanSquare(e) - meanSquare(t)) / meanSquare(e);
-        res.nu = trial, e = t, stepped = true;
+      LineSamples trial_lines = sample(trial);
+      const IconicError t = sumLines(trial_lines, c);
+      const auto [e_now, e_trial] = commonCost(lines, trial_lines, c);
+      if (t.overlap > 6 && e_trial < e_now) {
+        const double decrease = (e_now - e_trial) / e_now;
+        res.nu = trial, e = t, lines = std::move(trial_lines), stepped = true;
         res.rms_m.push_back(rms(e));
         res.converged = decrease < options.min_relative_decrease && c == c_noise;
         const double c_next = scale(e);
-        if (c_next < c) c = c_next, e = eval(res.nu, c);  // the loss narrows with the residuals
+        if (c_next < c) c = c_next, e = sumLines(lines, c);  // the loss narrows with the residuals
       }
     }
     if (!stepped || res.converged) {
@@ -281,16 +345,23 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
     }
     k *= 4;  // undo the last halving and try a longer step next time
   }
-  finishResult(res, map1, image2);
+  finishResult(res, map1, sumLines(sampleLines(map1, image2, res.nu, true, nullptr, 1, false, &hints), 0.0));
   return res;
 }
 
 namespace {
 
+// weightedCovariance with each line's search started at its hint (one per cell of map 1).
+Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
+                             const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source,
+                             std::vector<int>* hints);
+
 // LM on the plain residuals (weighted = false) or on r/σ; `c_final` receives the loss's last scale.
+// hints: one per cell of map 1 (−1 at first), each line's last bracket, for the caller's last
+// evaluation too.
 IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                 const IconicOptions& options, const std::vector<Eigen::Vector3d>& normals,
-                                bool weighted, double& c_final) {
+                                bool weighted, double& c_final, std::vector<int>& hints) {
   IconicResult res;
   res.nu = nu0;
   // The loss's narrowest scale: robust_sigmas σ of a residual, σ of the difference of two maps
@@ -303,12 +374,14 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
   double c = 0;
   for (std::size_t level = 0; level < strides.size(); ++level) {
     const int stride = std::max(1, strides[level]);
-    const auto eval = [&](const PoseVector& nu, double c) {
-      return iconicError(map1, image2, nu, true, c, &normals, stride, weighted);
+    // The lines of the current estimate: E at a narrower loss is summed from them again, not searched.
+    const auto sample = [&](const PoseVector& nu) {
+      return sampleLines(map1, image2, nu, true, &normals, stride, weighted, &hints);
     };
-    IconicError e = eval(res.nu, 0.0);
+    LineSamples lines = sample(res.nu);
+    IconicError e = sumLines(lines, 0.0);
     c = scale(e);
-    if (c > 0) e = eval(res.nu, c);
+    if (c > 0) e = sumLines(lines, c);
     if (level == 0) res.rms_m.push_back(rms(e));
     double lambda = 1e-3;
     bool converged = false;
@@ -319,28 +392,41 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
         break;
       }
       bool stepped = false;
+      // The step's largest motion of a line point: its translation plus its rotation at the map's
+      // half diagonal.
+      const auto motion = [&](const PoseVector& d) { return d.tail<3>().norm() + d.head<3>().norm() * half_diagonal; };
+      double rejected = std::numeric_limits<double>::infinity();  // the motion of the last step refused
       for (int tries = 0; tries < 12 && !stepped; ++tries) {
-        Matrix6d A = e.JtJ;
-        A.diagonal() += lambda * e.JtJ.diagonal();
-        const PoseVector delta = A.ldlt().solve(-0.5 * e.gradient);  // Jᵀr = ∂E/∂ν / 2 (weighted)
-        const IconicError t = eval(res.nu + delta, c);
-        if (t.overlap > 6 && meanSquare(t) < meanSquare(e)) {
-          const double decrease = (meanSquare(e) - meanSquare(t)) / meanSquare(e);
-          res.nu += delta, e = t, stepped = true, lambda = std::max(lambda / 10, 1e-12);
+        PoseVector delta;
+        // A retry at least halves the refused step: a larger λ that hardly shortens it (λ ≪ 1 next to
+        // diag JᵀJ) would evaluate the same step again.
+        for (int grow = 0; grow < 24; ++grow, lambda *= 10) {
+          Matrix6d A = e.JtJ;
+          A.diagonal() += lambda * e.JtJ.diagonal();
+          delta = A.ldlt().solve(-0.5 * e.gradient);  // Jᵀr = ∂E/∂ν / 2 (weighted)
+          if (motion(delta) <= 0.5 * rejected) break;
+        }
+        // A retry that moves no line point more than min_step_m: converged (the rule for steps taken).
+        if (tries > 0 && motion(delta) < options.min_step_m) break;
+        LineSamples trial_lines = sample(res.nu + delta);
+        const IconicError t = sumLines(trial_lines, c);
+        const auto [e_now, e_trial] = commonCost(lines, trial_lines, c);
+        if (t.overlap > 6 && e_trial < e_now) {
+          const double decrease = (e_now - e_trial) / e_now;
+          res.nu += delta, e = t, lines = std::move(trial_lines), stepped = true, lambda = std::max(lambda / 10, 1e-12);
           res.rms_m.push_back(rms(e));
-          // The step's largest motion of a line point: its translation plus its rotation at the
-          // map's half diagonal.
-          const double moved = delta.tail<3>().norm() + delta.head<3>().norm() * half_diagonal;
+          const double moved = motion(delta);
           converged = decrease < options.min_relative_decrease || moved < options.min_step_m;
           // The loss narrows with the residuals; the cost at the new scale is evaluated afresh, and
           // a narrower loss can still move the estimate.
           const double c_next = scale(e);
           if (c_next < c) {
             c = c_next;
-            e = eval(res.nu, c);
+            e = sumLines(lines, c);
             converged = moved < options.min_step_m && c == c_noise;
           }
         } else {
+          rejected = motion(delta);
           lambda *= 10;
         }
       }
@@ -360,8 +446,9 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
 IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                       const IconicOptions& options) {
   double c = 0;
-  IconicResult res = levenbergMarquardt(map1, image2, nu0, options, referenceNormals(map1), false, c);
-  finishResult(res, map1, image2);
+  std::vector<int> hints(std::size_t(map1.grid().cells()), -1);
+  IconicResult res = levenbergMarquardt(map1, image2, nu0, options, referenceNormals(map1), false, c, hints);
+  finishResult(res, map1, sumLines(sampleLines(map1, image2, res.nu, true, nullptr, 1, false, &hints), 0.0));
   return res;
 }
 
@@ -369,17 +456,19 @@ IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2,
                             const IconicOptions& options) {
   const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
   double c = 0;
-  IconicResult res = levenbergMarquardt(map1, image2, nu0, options, normals, true, c);
+  std::vector<int> hints(std::size_t(map1.grid().cells()), -1);
+  IconicResult res = levenbergMarquardt(map1, image2, nu0, options, normals, true, c, hints);
   // Whether the surface constrains every motion is a matter of its shape, not of the σ's: the
   // unweighted JᵀJ decides it (weights that differ by 100 between level ground and a rock's
   // flank would otherwise name the rock's directions free).
-  const IconicError e = iconicError(map1, image2, res.nu, true, 0.0, &normals, 1, false);
+  const IconicError e = sumLines(sampleLines(map1, image2, res.nu, true, &normals, 1, false, &hints), 0.0);
   res.overlap = e.overlap;
   const MapGrid& g = map1.grid();
   const Degeneracy d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell));
   res.degenerate = d.degenerate;
   res.free_directions = d.free_directions;
-  if (e.overlap > 6 && !d.degenerate) res.covariance = weightedCovariance(map1, image2, res.nu, c, normals, options.map1_source);
+  if (e.overlap > 6 && !d.degenerate)
+    res.covariance = covarianceWithHints(map1, image2, res.nu, c, normals, options.map1_source, &hints);
   else res.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
   return res;
 }
@@ -422,6 +511,14 @@ struct LineShare {
 
 Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
                             const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source) {
+  return covarianceWithHints(map1, image2, nu, c, reference_normals, map1_source, nullptr);
+}
+
+namespace {
+
+Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
+                             const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source,
+                             std::vector<int>* hints) {
   const MapGrid& grid = map1.grid();
   const LineModel model(nu, true);
   std::vector<std::vector<LineShare>> rows(grid.rows);
@@ -431,7 +528,8 @@ Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2,
       for (int col = 0; col < grid.cols; ++col) {
         LineTerm l;
         PoseVector J;
-        if (!model.residual(map1, image2, r, col, true, l) ||
+        int* hint = hints ? &(*hints)[std::size_t(r) * grid.cols + col] : nullptr;
+        if (!model.residual(map1, image2, r, col, true, l, hint) ||
             !model.jacobian(image2, &reference_normals, long(r) * grid.cols + col, l, J))
           continue;
         const double w = c > 0 ? 1.0 / (1.0 + l.u * l.u / (c * c)) : 1.0;
@@ -470,6 +568,8 @@ Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2,
   const Matrix6d Hinv = H.ldlt().solve(Matrix6d::Identity());
   return Hinv * S * Hinv;
 }
+
+}  // namespace
 
 IconicResult registerIconic(const ElevationMap& map_i, const RangeImage& image_j, const Raster<std::uint8_t>* edges_j,
                             const LocusConfig& config, IconicMethod method, const IconicOptions& options) {

@@ -102,14 +102,16 @@ Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio = 1e-4)
 // The paper's gradient descent (eq. 4), ν ← ν − K·∂E/∂ν, with the gain K = k·A·diag(AᵀHA)⁻¹·Aᵀ:
 // ν = A·μ takes rotations about the centroid of map 1's known cells, and each μ_i steps on its own
 // scale 1/(AᵀHA)_ii, H = JᵀJ (rotations and translations have different units; the paper leaves k
-// to the user). k is halved until the cost per line decreases and grown again after each success,
-// until the decrease is below min_relative_decrease (at the loss's narrowest scale) or the RMS
-// below floor_m. As LM: map 1's normals in the gradient, the annealed Cauchy loss; one level.
+// to the user). k is halved until the cost (over the lines both poses have) decreases and grown
+// again after each success, until the decrease is below min_relative_decrease (at the loss's
+// narrowest scale) or the RMS below floor_m. As LM: map 1's normals in the gradient, the annealed Cauchy loss; one level.
 IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                    const IconicOptions& options = {});
 
 // Levenberg–Marquardt on the same residuals r = z₁ − s: (JᵀJ + λ·diag JᵀJ)·δ = −Jᵀr, λ divided by 10
-// after a step that lowers the mean squared residual and multiplied by 10 otherwise.
+// after a step that lowers the cost (over the lines both poses have) and, after one that does not,
+// multiplied by 10 until the step is at most half as long; coarse to fine (options.strides), the
+// Cauchy loss annealed, map 1's normals in J; each line's search starts at its last bracket.
 IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                       const IconicOptions& options = {});
 

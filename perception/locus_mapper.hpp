@@ -75,6 +75,10 @@ class LocusMapper {
   // f(u, v): where the line u + s·v (map frame, v unit, pointing away from the ground: the
   // search runs from +v towards −v) meets the surface the sensor saw. Thread-safe.
   LocusHit intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v) const;
+  // The same, starting the scanline search at *hint (the upper scanline of a bracket found before:
+  // a neighbouring line's, or this line's at a nearby pose) and updating it; hint may be null or
+  // −1 (none). The crossing is the one the walk from the line's top finds (docs/locus.md).
+  LocusHit intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v, int* hint) const;
 
   // The unit normal, in the map frame, of the surface the search met at a Known `hit` (the image's
   // ranges interpolated bilinearly in its scan angles, as the search interpolates them): the
@@ -124,9 +128,6 @@ class LocusMapper {
     double d2_rows, d2_cols;
   };
 
-  // The same, starting the scanline search at *hint (a neighbouring line's crossing) and
-  // updating it; hint may be null.
-  LocusHit intersect(const Eigen::Vector3d& u, const Eigen::Vector3d& v, int* hint) const;
   // Δ = ρ_line − I at fractional row rf, whose scan angle has sine sp and cosine cp; inv_den is
   // 1/(b_z·cp − b_y·sp) (0: the line is parallel to that scan plane).
   LocusSample evaluate(const Line& l, double rf, double sp, double cp, double inv_den) const;
