@@ -87,6 +87,12 @@ struct LineModel {
 };
 
 double rms(const IconicError& e) { return e.overlap ? std::sqrt(e.sum_r2 / double(e.overlap)) : 0.0; }
+// One iteration's entry of a result's trace.
+void record(IconicResult& res, const IconicError& e) {
+  res.rms_m.push_back(rms(e));
+  res.E_m2.push_back(e.sum_r2);
+  res.lines.push_back(e.overlap);
+}
 double rmsNormalized(const IconicError& e) { return e.overlap ? std::sqrt(e.sum_u2 / double(e.overlap)) : 0.0; }
 
 // The median σ_z of a map's known cells, at least the sensor model's 1 mm floor.
@@ -307,7 +313,7 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
   const auto sample = [&](const PoseVector& nu) { return sampleLines(map1, image2, nu, true, &normals, 1, false, &hints); };
   LineSamples lines = sample(res.nu);
   IconicError e = sumLines(lines, 0.0);
-  res.rms_m.push_back(rms(e));
+  record(res, e);
   double c = scale(e);
   if (c > 0) e = sumLines(lines, c);
   // The gain K = A·diag(AᵀHA)⁻¹·Aᵀ: ν = A·μ, μ = (r, t′) with the rotation about the centroid of
@@ -332,7 +338,7 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
       if (t.overlap > 6 && e_trial < e_now) {
         const double decrease = (e_now - e_trial) / e_now;
         res.nu = trial, e = t, lines = std::move(trial_lines), stepped = true;
-        res.rms_m.push_back(rms(e));
+        record(res, e);
         res.converged = decrease < options.min_relative_decrease && c == c_noise;
         const double c_next = scale(e);
         if (c_next < c) c = c_next, e = sumLines(lines, c);  // the loss narrows with the residuals
@@ -382,7 +388,7 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
     IconicError e = sumLines(lines, 0.0);
     c = scale(e);
     if (c > 0) e = sumLines(lines, c);
-    if (level == 0) res.rms_m.push_back(rms(e));
+    if (level == 0) record(res, e);
     double lambda = 1e-3;
     bool converged = false;
     for (; res.iterations < options.max_iterations && e.overlap > 6;) {
@@ -414,7 +420,7 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
         if (t.overlap > 6 && e_trial < e_now) {
           const double decrease = (e_now - e_trial) / e_now;
           res.nu += delta, e = t, lines = std::move(trial_lines), stepped = true, lambda = std::max(lambda / 10, 1e-12);
-          res.rms_m.push_back(rms(e));
+          record(res, e);
           const double moved = motion(delta);
           converged = decrease < options.min_relative_decrease || moved < options.min_step_m;
           // The loss narrows with the residuals; the cost at the new scale is evaluated afresh, and

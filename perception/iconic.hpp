@@ -77,6 +77,8 @@ struct IconicResult {
   PoseVector nu = PoseVector::Zero();  // the estimate of T (map 1 → image 2's frame)
   int iterations = 0;
   std::vector<double> rms_m;           // RMS residual per iteration (the first: at the start)
+  std::vector<double> E_m2;            // and eq. 6's E there, Σ r² over the lines of the overlap
+  std::vector<long> lines;             // and that overlap
   long overlap = 0;
   // Descent and LM: σ²·(JᵀJ)⁻¹ at the estimate, σ² = E/(N − 6). Weighted: (JᵀWJ)⁻¹ corrected for
   // the pixels that neighbouring lines share (weightedCovariance); no σ² from the residuals.

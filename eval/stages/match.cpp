@@ -178,7 +178,8 @@ void run(RunState& s) {
                                            ", features after T_F (" + name + ")"));
       }
       nlohmann::ordered_json trace = nlohmann::ordered_json::array();
-      for (std::size_t k = 0; k < res.rms_m.size(); ++k) trace.push_back({{"iteration", k}, {"rms_m", res.rms_m[k]}});
+      for (std::size_t k = 0; k < res.rms_m.size(); ++k)
+        trace.push_back({{"iteration", k}, {"E", res.E_m2[k]}, {"rms_m", res.rms_m[k]}, {"lines", res.lines[k]}});
       pair["trace"] = trace;
       writeJson(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + methodFileName(name) + ".json"), pair);
       registered.push_back({name, perception::poseFromVector(reg.nu).inverse() * believed_WS, res.rms_m});
