@@ -1,6 +1,7 @@
 // The locus-vs-Cartesian experiment: two sweeps run through the sweep API, then a separate report
 // step that reads only their results.csv (so a sweep run in shards and merged reports the same),
 // groups the runs that differ only in their seed, and writes mean ± standard deviation over seeds.
+// Also the helpers every experiment shares (experiment_internal.hpp).
 #include "eval/experiment.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -20,19 +21,19 @@
 #include <stdexcept>
 #include <vector>
 
+#include "eval/experiment_internal.hpp"
 #include "eval/io.hpp"
 #include "eval/map_metrics.hpp"
 #include "eval/plot.hpp"
 #include "eval/sweep.hpp"
 
 namespace ambler::eval {
-namespace {
+
+// ---- shared with the other experiments (experiment_internal.hpp) ---------------------------------
+
+namespace experiment_detail {
 
 namespace fs = std::filesystem;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr std::size_t kBands = kRangeBandEdgesM.size() - 1;
-
-// ---- running ------------------------------------------------------------------------------------
 
 std::string readFile(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
@@ -42,8 +43,6 @@ std::string readFile(const fs::path& file) {
   return text.str();
 }
 
-// The sweep file as it is, or for --quick with only the first and last value of every axis and
-// the first seed; still read by the sweep reader, so it is checked like any sweep.
 Sweep experimentSweep(const fs::path& file, bool quick) {
   if (!quick) return loadSweep(file);
   YAML::Node root;
@@ -68,112 +67,172 @@ Sweep experimentSweep(const fs::path& file, bool quick) {
   return parseSweep(YAML::Dump(root), file);
 }
 
-// ---- results ------------------------------------------------------------------------------------
+void requireAxes(const Sweep& s, std::initializer_list<const char*> keys) {
+  for (const char* key : keys)
+    if (std::none_of(s.axes.begin(), s.axes.end(), [&](const SweepAxis& a) { return a.key == key; }))
+      throw SweepError(s.file.string() + ": axes: the experiment's report needs an axis " + key);
+}
 
-struct Stat {
-  double mean = kNaN, sd = kNaN;  // sd: sample standard deviation, NaN with fewer than two values
-  int n = 0;                      // finite values
-};
+fs::path runExperimentSweep(const Sweep& sweep, const fs::path& dir, int jobs, bool progress) {
+  SweepOptions so;
+  so.out = dir;
+  so.jobs = jobs;
+  so.progress = progress;
+  return runSweep(sweep, so);
+}
 
-// One sweep's results.csv, its runs grouped by every axis but the seed.
-class Results {
- public:
-  Results(const Sweep& sweep, const fs::path& csv) : sweep_(sweep) {
-    const auto records = parseResultsCsv(readFile(csv));
-    if (!records || records->empty()) throw SweepError(csv.string() + ": not a results.csv");
-    const auto& header = records->front();
-    for (std::size_t i = 0; i < header.size(); ++i) column_[header[i]] = i;
-    std::size_t seed_axis = sweep.axes.size();
-    for (std::size_t a = 0; a < sweep.axes.size(); ++a)
-      if (sweep.axes[a].key == "seed") seed_axis = a;
-    rows_.assign(sweep.runs.size(), {});
-    std::map<std::vector<std::size_t>, std::size_t> group_of;
-    for (std::size_t r = 1; r < records->size(); ++r) {
-      const auto& row = (*records)[r];
-      std::size_t k = 0;
-      if (row.empty() || std::from_chars(row[0].data(), row[0].data() + row[0].size(), k).ec != std::errc() ||
-          k >= sweep.runs.size())
-        throw SweepError(csv.string() + ": row " + std::to_string(r) + ": not a run of " + sweep.file.string());
-      rows_[k] = row;
-      auto key = sweep.combination(k);
-      if (seed_axis < key.size()) key.erase(key.begin() + std::ptrdiff_t(seed_axis));
-      const auto [it, added] = group_of.emplace(key, groups_.size());
-      if (added) groups_.emplace_back();
-      groups_[it->second].push_back(k);
-    }
+namespace {
+
+Stat summary(const std::vector<double>& v) {
+  Stat s;
+  s.n = int(v.size());
+  if (v.empty()) return s;
+  double sum = 0;
+  for (const double x : v) sum += x;
+  s.mean = sum / double(v.size());
+  if (v.size() < 2) return s;
+  double ss = 0;
+  for (const double x : v) ss += (x - s.mean) * (x - s.mean);
+  s.sd = std::sqrt(ss / double(v.size() - 1));
+  return s;
+}
+
+}  // namespace
+
+Results::Results(const Sweep& sweep, const fs::path& csv) : sweep_(sweep) {
+  const auto records = parseResultsCsv(readFile(csv));
+  if (!records || records->empty()) throw SweepError(csv.string() + ": not a results.csv");
+  const auto& header = records->front();
+  for (std::size_t i = 0; i < header.size(); ++i) column_[header[i]] = i;
+  std::size_t seed_axis = sweep.axes.size();
+  for (std::size_t a = 0; a < sweep.axes.size(); ++a)
+    if (sweep.axes[a].key == "seed") seed_axis = a;
+  rows_.assign(sweep.runs.size(), {});
+  std::map<std::vector<std::size_t>, std::size_t> group_of;
+  for (std::size_t r = 1; r < records->size(); ++r) {
+    const auto& row = (*records)[r];
+    std::size_t k = 0;
+    if (row.empty() || std::from_chars(row[0].data(), row[0].data() + row[0].size(), k).ec != std::errc() ||
+        k >= sweep.runs.size())
+      throw SweepError(csv.string() + ": row " + std::to_string(r) + ": not a run of " + sweep.file.string());
+    rows_[k] = row;
+    auto key = sweep.combination(k);
+    if (seed_axis < key.size()) key.erase(key.begin() + std::ptrdiff_t(seed_axis));
+    const auto [it, added] = group_of.emplace(key, groups_.size());
+    if (added) groups_.emplace_back();
+    groups_[it->second].push_back(k);
   }
+}
 
-  // Groups in run order; each is the runs of one combination of the axes other than the seed.
-  const std::vector<std::vector<std::size_t>>& groups() const { return groups_; }
-  const Scenario& scenario(const std::vector<std::size_t>& group) const { return sweep_.runs[group.front()]; }
+std::string Results::cell(std::size_t run, const std::string& column) const {
+  const auto it = column_.find(column);
+  return run >= rows_.size() || it == column_.end() || it->second >= rows_[run].size() ? "" : rows_[run][it->second];
+}
 
-  std::string cell(std::size_t run, const std::string& column) const {
-    const auto it = column_.find(column);
-    return it == column_.end() || it->second >= rows_[run].size() ? "" : rows_[run][it->second];
+double Results::value(std::size_t run, const std::string& column) const {
+  const std::string text = cell(run, column);
+  double x = kNaN;
+  if (text.empty() || std::from_chars(text.data(), text.data() + text.size(), x).ec != std::errc()) return kNaN;
+  return x;
+}
+
+std::vector<double> Results::values(const std::vector<std::size_t>& group, const std::string& column) const {
+  std::vector<double> v;
+  for (const std::size_t k : group)
+    if (const double x = value(k, column); std::isfinite(x)) v.push_back(x);
+  return v;
+}
+
+Stat Results::stat(const std::vector<std::size_t>& group, const std::string& column) const {
+  return summary(values(group, column));
+}
+
+// Each run of the locus experiment maps the same scan both ways, so the seeds pair the two maps.
+Stat Results::difference(const std::vector<std::size_t>& group, const std::string& a, const std::string& b) const {
+  std::vector<double> v;
+  for (const std::size_t k : group)
+    if (const double d = value(k, a) - value(k, b); std::isfinite(d)) v.push_back(d);
+  return summary(v);
+}
+
+double Results::largest(const std::vector<std::size_t>& group, const std::string& column) const {
+  double out = kNaN;
+  for (const std::size_t k : group)
+    if (const double x = value(k, column); std::isfinite(x) && !(x <= out)) out = x;
+  return out;
+}
+
+std::string format(const char* pattern, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, pattern, v);
+  return buf;
+}
+
+int decimalsFor(double v) {
+  const double a = std::abs(v);
+  return a < 1 ? 3 : a < 10 ? 2 : a < 100 ? 1 : 0;
+}
+
+std::string number(double v, int decimals) {
+  if (!std::isfinite(v)) return "—";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals < 0 ? decimalsFor(v) : decimals, v);
+  return buf;
+}
+
+void appendCell(std::string& row, const std::string& text) { row.append(" ").append(text).append(" |"); }
+
+// The default PNG level makes a four-panel plot twice as large.
+void writeFigure(const fs::path& path, const cv::Mat& image) {
+  std::vector<uchar> bytes;
+  if (!cv::imencode(".png", image, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+    throw std::runtime_error(path.string() + ": could not encode image");
+  writeText(path, std::string(bytes.begin(), bytes.end()));
+}
+
+// renderPlot puts the legend in the corner of the plot area that hides the fewest points; the
+// invisible point sits at the height of a data point.
+void legendRoom(PlotSpec& spec, double x_room) {
+  for (const Series& s : spec.series)
+    for (const double y : s.y)
+      if (std::isfinite(y) && (!spec.log_y || y > 0)) {
+        spec.series.push_back(Series{"", {x_room}, {y}, cv::Scalar(255, 255, 255), false, false});
+        return;
+      }
+}
+
+cv::Mat grid2(const std::vector<cv::Mat>& panels, int cols) {
+  std::vector<cv::Mat> rows;
+  for (std::size_t i = 0; i < panels.size(); i += std::size_t(cols)) {
+    cv::Mat row;
+    cv::hconcat(std::vector<cv::Mat>(panels.begin() + std::ptrdiff_t(i),
+                                     panels.begin() + std::ptrdiff_t(std::min(panels.size(), i + std::size_t(cols)))),
+                row);
+    rows.push_back(row);
   }
+  cv::Mat out;
+  cv::vconcat(rows, out);
+  return out;
+}
 
-  Stat stat(const std::vector<std::size_t>& group, const std::string& column) const {
-    std::vector<double> v;
-    for (const std::size_t k : group)
-      if (const double x = value(k, column); std::isfinite(x)) v.push_back(x);
-    return summary(v);
-  }
+}  // namespace experiment_detail
 
-  // The run-by-run difference a − b over the runs where both are finite: each run maps the same
-  // scan both ways, so the seeds pair the two maps.
-  Stat difference(const std::vector<std::size_t>& group, const std::string& a, const std::string& b) const {
-    std::vector<double> v;
-    for (const std::size_t k : group)
-      if (const double d = value(k, a) - value(k, b); std::isfinite(d)) v.push_back(d);
-    return summary(v);
-  }
+namespace {
 
-  // The largest value over the runs of a group (NaN if none is finite).
-  double largest(const std::vector<std::size_t>& group, const std::string& column) const {
-    double out = kNaN;
-    for (const std::size_t k : group)
-      if (const double x = value(k, column); std::isfinite(x) && !(x <= out)) out = x;
-    return out;
-  }
+namespace fs = std::filesystem;
+using namespace experiment_detail;
+constexpr std::size_t kBands = kRangeBandEdgesM.size() - 1;
 
-  // The gap filling the runs of a group chose: "linear", or "linear 2/3, nearest 1/3".
-  std::string fills(const std::vector<std::size_t>& group) const {
-    std::map<std::string, int> count;
-    for (const std::size_t k : group) ++count[cell(k, "map_cartesian.0.gap_fill")];
-    if (count.size() == 1) return count.begin()->first.empty() ? "—" : count.begin()->first;
-    std::string out;
-    for (const auto& [name, n] : count)
-      out += (out.empty() ? "" : ", ") + name + " " + std::to_string(n) + "/" + std::to_string(group.size());
-    return out;
-  }
-
- private:
-  double value(std::size_t run, const std::string& column) const {
-    const std::string text = cell(run, column);
-    double x = kNaN;
-    if (text.empty() || std::from_chars(text.data(), text.data() + text.size(), x).ec != std::errc()) return kNaN;
-    return x;
-  }
-
-  static Stat summary(const std::vector<double>& v) {
-    Stat s;
-    s.n = int(v.size());
-    if (v.empty()) return s;
-    double sum = 0;
-    for (const double x : v) sum += x;
-    s.mean = sum / double(v.size());
-    if (v.size() < 2) return s;
-    double ss = 0;
-    for (const double x : v) ss += (x - s.mean) * (x - s.mean);
-    s.sd = std::sqrt(ss / double(v.size() - 1));
-    return s;
-  }
-
-  const Sweep& sweep_;
-  std::map<std::string, std::size_t> column_;
-  std::vector<std::vector<std::string>> rows_;
-  std::vector<std::vector<std::size_t>> groups_;
-};
+// The gap filling the runs of a group chose: "linear", or "linear 2/3, nearest 1/3".
+std::string fills(const Results& r, const std::vector<std::size_t>& group) {
+  std::map<std::string, int> count;
+  for (const std::size_t k : group) ++count[r.cell(k, "map_cartesian.0.gap_fill")];
+  if (count.size() == 1) return count.begin()->first.empty() ? "—" : count.begin()->first;
+  std::string out;
+  for (const auto& [name, n] : count)
+    out += (out.empty() ? "" : ", ") + name + " " + std::to_string(n) + "/" + std::to_string(group.size());
+  return out;
+}
 
 // Column names of metrics.json leaves, for the locus map ("map") or the baseline ("map_cartesian").
 std::string whole(const char* map, const char* key) { return std::string(map) + ".0." + key; }
@@ -182,12 +241,6 @@ std::string band(const char* map, std::size_t b, const char* key) {
 }
 
 // ---- labels and numbers -------------------------------------------------------------------------
-
-std::string format(const char* pattern, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, pattern, v);
-  return buf;
-}
 
 std::string tiltLabel(const Scenario& s) {
   const double a = s.terrain.slope_deg.x(), b = s.terrain.slope_deg.y();
@@ -207,20 +260,6 @@ std::string noiseLabel(const perception::SensorModel& s) {
 std::string bandLabel(std::size_t b) {
   const double lo = kRangeBandEdgesM[b], hi = kRangeBandEdgesM[b + 1];
   return std::isinf(hi) ? format("≥ %g m", lo) : format("%g", lo) + format("–%g m", hi);
-}
-
-// As many decimals as a figure's size needs: 0.123, 1.23, 12.3, 123.
-int decimalsFor(double v) {
-  const double a = std::abs(v);
-  return a < 1 ? 3 : a < 10 ? 2 : a < 100 ? 1 : 0;
-}
-
-// `decimals` < 0: decimalsFor(v).
-std::string number(double v, int decimals = -1) {
-  if (!std::isfinite(v)) return "—";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals < 0 ? decimalsFor(v) : decimals, v);
-  return buf;
 }
 
 // mean ± sd in `scale` units (mm: 1000, %: 100), both to the mean's decimals; the mean alone with
@@ -259,9 +298,6 @@ std::string ratioCell(const Stat& locus, const Stat& cart) {
 
 // ---- tables -------------------------------------------------------------------------------------
 
-// " text |": one more cell of a markdown row.
-void appendCell(std::string& row, const std::string& text) { row.append(" ").append(text).append(" |"); }
-
 using Labeller = std::string (*)(const Results&, const std::vector<std::size_t>&);
 
 std::string tiltRow(const Results& r, const std::vector<std::size_t>& g) {
@@ -296,7 +332,7 @@ std::string wholeMapTable(const Results& r, const std::string& head, Labeller la
     for (const std::string& cell :
          {bold(meanSd(cl, 100, 1), bc < 0), bold(meanSd(cc, 100, 1), bc > 0), bold(meanSd(rl, 1000), br < 0),
           bold(meanSd(rc, 1000), br > 0), ratioCell(rl, rc), bold(meanSd(ml, 1000), bm < 0),
-          bold(meanSd(mc, 1000), bm > 0), worst, r.fills(g), meanSd(r.stat(g, whole("map", "within_1sigma")), 100, 1),
+          bold(meanSd(mc, 1000), bm > 0), worst, fills(r, g), meanSd(r.stat(g, whole("map", "within_1sigma")), 100, 1),
           meanSd(r.stat(g, whole("map", "shadow")), 1, 0)})
       appendCell(row, cell);
     out += row + "\n";
@@ -376,43 +412,6 @@ std::string report(const Results& tilt, const Results& res, bool quick) {
 }
 
 // ---- plots --------------------------------------------------------------------------------------
-
-constexpr int kPanelWidth = 800, kPanelHeight = 500;
-
-// A figure for the docs: PNG at the highest compression (the default level makes a four-panel
-// plot twice as large), written atomically like every run file.
-void writeFigure(const fs::path& path, const cv::Mat& image) {
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", image, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9}))
-    throw std::runtime_error(path.string() + ": could not encode image");
-  writeText(path, std::string(bytes.begin(), bytes.end()));
-}
-
-// renderPlot puts the legend in the corner of the plot area that hides the fewest points; an
-// invisible point at x = `x_room` (at the height of a data point) leaves an empty strip on the
-// right for it.
-void legendRoom(PlotSpec& spec, double x_room) {
-  for (const Series& s : spec.series)
-    for (const double y : s.y)
-      if (std::isfinite(y) && (!spec.log_y || y > 0)) {
-        spec.series.push_back(Series{"", {x_room}, {y}, cv::Scalar(255, 255, 255), false, false});
-        return;
-      }
-}
-
-cv::Mat grid2(const std::vector<cv::Mat>& panels, int cols) {
-  std::vector<cv::Mat> rows;
-  for (std::size_t i = 0; i < panels.size(); i += std::size_t(cols)) {
-    cv::Mat row;
-    cv::hconcat(std::vector<cv::Mat>(panels.begin() + std::ptrdiff_t(i),
-                                     panels.begin() + std::ptrdiff_t(std::min(panels.size(), i + std::size_t(cols)))),
-                row);
-    rows.push_back(row);
-  }
-  cv::Mat out;
-  cv::vconcat(rows, out);
-  return out;
-}
 
 // Locus (lines and dots) and Cartesian (lines) of one metric, one colour per noise level, against
 // the tilt about x (facing: axis 0) or y (sideways: axis 1).
@@ -521,9 +520,7 @@ std::string runLocusVsCartesian(const ExperimentOptions& opt) {
   const Sweep tilt = experimentSweep(opt.sweeps / "tilt_noise.yaml", opt.quick);
   const Sweep res = experimentSweep(opt.sweeps / "resolution.yaml", opt.quick);
   const auto require = [](const Sweep& s, std::initializer_list<const char*> keys) {
-    for (const char* key : keys)
-      if (std::none_of(s.axes.begin(), s.axes.end(), [&](const SweepAxis& a) { return a.key == key; }))
-        throw SweepError(s.file.string() + ": axes: the experiment's report needs an axis " + key);
+    requireAxes(s, keys);
     for (const Scenario& sc : s.runs)
       if (!sc.map || sc.map->baseline != Baseline::Cartesian)
         throw SweepError(s.file.string() + ": the experiment needs map.baseline: cartesian in every run");
@@ -531,15 +528,8 @@ std::string runLocusVsCartesian(const ExperimentOptions& opt) {
   require(tilt, {"terrain.slope_deg", "sensor", "seed"});
   require(res, {"map.cell_m", "seed"});
 
-  const auto run = [&](const Sweep& s, const char* dir) {
-    SweepOptions so;
-    so.out = opt.out / dir;
-    so.jobs = opt.jobs;
-    so.progress = opt.progress;
-    return runSweep(s, so);
-  };
-  const Results tilt_results(tilt, run(tilt, "tilt_noise"));
-  const Results res_results(res, run(res, "resolution"));
+  const Results tilt_results(tilt, runExperimentSweep(tilt, opt.out / "tilt_noise", opt.jobs, opt.progress));
+  const Results res_results(res, runExperimentSweep(res, opt.out / "resolution", opt.jobs, opt.progress));
 
   const std::string md = report(tilt_results, res_results, opt.quick);
   writeText(opt.out / "table.md", md);

@@ -1,8 +1,9 @@
 #pragma once
-// `ambler experiment locus-vs-cartesian`: the paper's first experiment (§6) — the locus map against
-// the Cartesian baseline across surface orientation and noise, and across map resolution — run as
-// two sweeps, aggregated over seeds into markdown tables and plots
-// (docs/experiments/locus_vs_cartesian.md).
+// `ambler experiment`: the paper's experiments (§6) run as sweeps, aggregated over seeds into
+// markdown tables and plots. locus-vs-cartesian: the locus map against the Cartesian baseline
+// across surface orientation and noise, and across map resolution
+// (docs/experiments/locus_vs_cartesian.md). matching: every matching method against the rover's
+// initial error (docs/experiments/matching.md).
 #include <filesystem>
 #include <string>
 
@@ -10,7 +11,7 @@ namespace ambler::eval {
 
 struct ExperimentOptions {
   std::filesystem::path out;                               // DIR: sweeps, table.md, the plots
-  std::filesystem::path sweeps = "scenarios/experiments";  // holds tilt_noise.yaml, resolution.yaml
+  std::filesystem::path sweeps = "scenarios/experiments";  // holds the sweep files (tilt_noise.yaml, ...)
   bool quick = false;    // the first and last value of every axis and the first seed only
   int jobs = 1;          // scenarios run at once (as `ambler sweep --jobs`)
   bool progress = true;  // the sweeps' progress lines on stderr
@@ -21,5 +22,15 @@ struct ExperimentOptions {
 // out/range_bands.png, and returns the markdown of table.md. Throws SweepError for a bad sweep
 // file, a sweep without the axes the report needs, or a failed run.
 std::string runLocusVsCartesian(const ExperimentOptions& options);
+
+// Runs the sweep matching_basin.yaml into out/basin/ (results.csv and runs/<k>/), then
+// reportMatching. Throws SweepError for a bad sweep file, a sweep without the initial error's
+// axes and the seed or without matching methods, or a failed run.
+std::string runMatching(const ExperimentOptions& options);
+
+// Reports an already-run basin sweep from out/basin/results.csv alone (a sweep run in shards and
+// merged reports the same): writes out/table.md and out/basin.png and returns the markdown of
+// table.md. Throws SweepError as runMatching does, and when the CSV is missing or not the sweep's.
+std::string reportMatching(const ExperimentOptions& options);
 
 }  // namespace ambler::eval

@@ -92,6 +92,22 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber);
   locus_vs_cartesian->add_flag("--quiet,-q", exp_quiet, "No progress lines on stderr");
 
+  ExperimentOptions match_opt;
+  std::string match_out, match_sweeps = match_opt.sweeps.string();
+  bool match_quiet = false, match_report = false;
+  auto* matching = experiment->add_subcommand(
+      "matching", "Every matching method against the rover's initial error, translation x rotation x seed (§6, "
+                  "fig. 5): DIR/table.md, DIR/basin.png and the sweep's DIR/basin/results.csv.");
+  matching->add_option("--out,-o", match_out, "Experiment directory to write (created if missing)")->required();
+  matching->add_flag("--quick", match_opt.quick, "A reduced run: the first and last value of every axis, the first seed");
+  matching->add_option("--sweeps", match_sweeps, "Directory of matching_basin.yaml")->capture_default_str();
+  matching->add_option("--jobs,-j", match_opt.jobs, "Scenarios run at once (each already uses every core)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  matching->add_flag("--report", match_report,
+                     "Run nothing: report DIR/basin/results.csv as it is (e.g. merged from shards)");
+  matching->add_flag("--quiet,-q", match_quiet, "No progress lines on stderr");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -120,6 +136,11 @@ int main(int argc, char** argv) {
       exp_opt.sweeps = exp_sweeps;
       exp_opt.progress = !exp_quiet;
       std::fputs(runLocusVsCartesian(exp_opt).c_str(), stdout);
+    } else if (*matching) {
+      match_opt.out = match_out;
+      match_opt.sweeps = match_sweeps;
+      match_opt.progress = !match_quiet;
+      std::fputs((match_report ? reportMatching(match_opt) : runMatching(match_opt)).c_str(), stdout);
     } else if (*bench_scan) {
       bench_opt.json = bench_json;
       benchScan(bench_opt);

@@ -1,5 +1,7 @@
 // `ambler experiment locus-vs-cartesian --quick` end to end: the first and last value of every
 // axis of scenarios/experiments/*.yaml with one seed, run twice into temporary directories.
+// `ambler experiment matching`: its report on a hand-made results.csv (counts and medians by
+// hand), and --quick end to end.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -121,6 +123,151 @@ TEST(Experiment, MissingSweepFileIsAnError) {
   opt.progress = false;
   EXPECT_THROW(runLocusVsCartesian(opt), SweepError);
   EXPECT_FALSE(fs::exists(out.dir / "table.md"));
+}
+
+// ---- the matching experiment ----
+
+fs::path basinBase() { return fs::path(AMBLER_SOURCE_DIR) / "scenarios" / "experiments" / "matching_base.yaml"; }
+
+void write(const fs::path& file, const std::string& text) {
+  fs::create_directories(file.parent_path());
+  std::ofstream(file, std::ios::binary) << text;
+}
+
+// A 2 × 2 × 3 basin (0.5 and 2 m, 3 and 30°, seeds 1-3) and its results.csv, made by hand: run k
+// has translation k / 6, rotation (k / 3) mod 2, seed k mod 3 + 1 (the last axis fastest).
+struct HandMadeBasin {
+  TempDir dir{"basin-hand"};
+  ExperimentOptions opt;
+  HandMadeBasin() {
+    write(dir.dir / "sweeps" / "matching_basin.yaml",
+          "name: basin_hand\nbase: " + basinBase().string() +
+              "\naxes:\n"
+              "  matching.initial_error.xyz_m: [[0.3, 0.4, 0], [1.2, 1.6, 0]]\n"
+              "  matching.initial_error.rpy_deg: [[0, 0, 3], [0, 0, 30]]\n"
+              "  seed: [1, 2, 3]\n");
+    // Per run: translation error (cm), rotation error (deg), iterations, success.
+    const int f_cm[] = {2, 3, 9, 6, 7, 8, 2, 4, 5, 6, 6, 20};
+    const int lm_cm[] = {1, 1, 1, 1, 2, 90, 1, 1, 1, 80, 90, 100};
+    const int lm_it[] = {10, 12, 14, 20, 22, 100, 11, 11, 11, 100, 100, 100};
+    std::string csv = "run,matching.initial_error.xyz_m,matching.initial_error.rpy_deg,seed";
+    for (int m = 0; m < 2; ++m)
+      for (const char* key : {"method", "translation_error_m", "rotation_error_deg", "success", "iterations"})
+        csv += ",registration." + std::to_string(m) + "." + key;
+    csv += "\n";
+    for (int k = 0; k < 12; ++k) {
+      csv += std::to_string(k) + (k / 6 ? ",1.2;1.6;0" : ",0.3;0.4;0") + ((k / 3) % 2 ? ",0;0;30," : ",0;0;3,") +
+             std::to_string(k % 3 + 1);
+      csv += ",features," + std::to_string(f_cm[k] / 100.0) + ",0.2," + (f_cm[k] <= 5 ? "true" : "false") + ",0";
+      csv += ",iconic_lm," + std::to_string(lm_cm[k] / 100.0) + (lm_cm[k] < 5 ? ",0.1,true," : ",20,false,") +
+             std::to_string(lm_it[k]) + "\n";
+    }
+    write(dir.dir / "out" / "basin" / "results.csv", csv);
+    opt.sweeps = dir.dir / "sweeps";
+    opt.out = dir.dir / "out";
+    opt.progress = false;
+  }
+};
+
+TEST(ExperimentMatching, ReportCountsAndMediansOfHandMadeRows) {
+  HandMadeBasin basin;
+  const std::string md = reportMatching(basin.opt);
+  EXPECT_EQ(md, slurp(basin.opt.out / "table.md"));
+
+  // Per cell: successes of the seeds, median translation (cm) and rotation error.
+  const auto features = section(md, "### Success by initial error: features");
+  ASSERT_EQ(features.size(), 3u) << md;
+  EXPECT_EQ(features[0], "| initial translation \\ rotation | 3° | 30° |");
+  EXPECT_EQ(features[1], "| 0.5 m | 2/3 · 3.00 cm · 0.200° | 0/3 · 7.00 cm · 0.200° |");
+  EXPECT_EQ(features[2], "| 2 m | **3/3** · 4.00 cm · 0.200° | 0/3 · 6.00 cm · 0.200° |");
+  const auto lm = section(md, "### Success by initial error: iconic_lm");
+  ASSERT_EQ(lm.size(), 3u);
+  EXPECT_EQ(lm[1], "| 0.5 m | **3/3** · 1.00 cm · 0.100° | 2/3 · 2.00 cm · 0.100° |");
+  EXPECT_EQ(lm[2], "| 2 m | **3/3** · 1.00 cm · 0.100° | 0/3 · 90.0 cm · 20.0° |");
+
+  // Over all 12 runs. features: sorted 2 2 3 4 5 6 | 6 6 7 8 9 20 cm -> median 6, max 20.
+  // iconic_lm iterations: 10 11 11 11 12 14 | 20 22 100 ... -> 17; of the 8 successes
+  // 10 11 11 11 | 12 14 20 22 -> 11.5.
+  const auto all = section(md, "### Over all runs");
+  ASSERT_EQ(all.size(), 3u);
+  EXPECT_EQ(all[1], "| features | 5/12 (42 %) | 6.00 / 20.0 | 0.200 / 0.200 | 0 / 0 | 0 |");
+  EXPECT_EQ(all[2], "| iconic_lm | 8/12 (67 %) | 1.00 / 100 | 0.100 / 20.0 | 17 / 100 | 11.5 |");
+
+  // The largest initial error: runs 9-11, every method by seed.
+  const auto worst = section(md, "### The largest initial error (2 m, 30°) per seed");
+  ASSERT_EQ(worst.size(), 7u) << md;
+  EXPECT_EQ(worst[1], "| features | 1 | 6.00 | 0.200 | 0 | **no** |");
+  EXPECT_EQ(worst[3], "| features | 3 | 20.0 | 0.200 | 0 | **no** |");
+  EXPECT_EQ(worst[6], "| iconic_lm | 3 | 100 | 20.0 | 100 | **no** |");
+
+  const cv::Mat img = cv::imread((basin.opt.out / "basin.png").string());
+  ASSERT_FALSE(img.empty());
+  EXPECT_EQ(img.cols, 2 * 620);  // two methods side by side
+
+  // Same rows, same bytes.
+  const std::string png = slurp(basin.opt.out / "basin.png");
+  EXPECT_EQ(reportMatching(basin.opt), md);
+  EXPECT_EQ(slurp(basin.opt.out / "basin.png"), png);
+}
+
+TEST(ExperimentMatching, ReportNeedsTheResultsAndTheInitialErrorAxes) {
+  HandMadeBasin basin;
+  fs::remove(basin.opt.out / "basin" / "results.csv");
+  EXPECT_THROW(reportMatching(basin.opt), SweepError);
+  write(basin.opt.sweeps / "matching_basin.yaml",
+        "name: basin_hand\nbase: " + basinBase().string() + "\naxes:\n  seed: [1, 2, 3]\n");
+  try {
+    reportMatching(basin.opt);
+    FAIL() << "no error";
+  } catch (const SweepError& e) {
+    EXPECT_NE(std::string(e.what()).find("matching.initial_error.xyz_m"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(basin.opt.out / "table.md"));
+}
+
+TEST(ExperimentMatching, QuickRunReportsEveryMethodAtTheCorners) {
+  TempDir out("matching-quick");
+  ExperimentOptions opt;
+  opt.sweeps = fs::path(AMBLER_SOURCE_DIR) / "scenarios" / "experiments";
+  opt.quick = true;
+  opt.progress = false;
+  opt.out = out.dir;
+  const std::string md = runMatching(opt);
+  EXPECT_EQ(md, slurp(out.dir / "table.md"));
+  for (const char* method : {"features", "features+iconic", "iconic", "iconic_lm"}) {
+    const auto grid = section(md, std::string("### Success by initial error: ") + method);
+    ASSERT_EQ(grid.size(), 3u) << method << "\n" << md;  // the header, 0.25 m and 2 m
+    EXPECT_TRUE(grid[0].ends_with("| 3° | 30° |")) << grid[0];
+    EXPECT_TRUE(grid[1].starts_with("| 0.25 m | ")) << grid[1];
+    EXPECT_TRUE(grid[2].starts_with("| 2 m | ")) << grid[2];
+  }
+  EXPECT_EQ(section(md, "### Over all runs").size(), 5u);
+  EXPECT_EQ(section(md, "### The largest initial error (2 m, 30°) per seed").size(), 5u);  // one seed
+
+  // The runs start where the sweep puts them: |E| = 0.25 or 2 m, 3 or 30° about z.
+  const auto csv = parseResultsCsv(slurp(out.dir / "basin" / "results.csv"));
+  ASSERT_TRUE(csv);
+  ASSERT_EQ(csv->size(), 5u);
+  const auto& header = csv->front();
+  const auto value = [&](std::size_t row, const std::string& column) {
+    const auto it = std::find(header.begin(), header.end(), column);
+    EXPECT_NE(it, header.end()) << column;
+    const std::string& text = (*csv)[row][std::size_t(it - header.begin())];
+    double v = std::numeric_limits<double>::quiet_NaN();
+    std::from_chars(text.data(), text.data() + text.size(), v);
+    return v;
+  };
+  for (std::size_t run = 0; run < 4; ++run)
+    for (int m = 0; m < 4; ++m) {
+      const std::string k = "registration." + std::to_string(m) + ".";
+      EXPECT_NEAR(value(run + 1, k + "initial_translation_error_m"), run < 2 ? 0.25 : 2.0, 1e-9);
+      EXPECT_NEAR(value(run + 1, k + "initial_rotation_error_deg"), run % 2 ? 30.0 : 3.0, 1e-9);
+    }
+
+  // Reported again from the same results.csv: the same bytes.
+  const std::string png = slurp(out.dir / "basin.png");
+  EXPECT_EQ(reportMatching(opt), md);
+  EXPECT_EQ(slurp(out.dir / "basin.png"), png);
 }
 
 }  // namespace
