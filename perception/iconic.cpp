@@ -577,20 +577,4 @@ Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2
 
 }  // namespace
 
-IconicResult registerIconic(const ElevationMap& map_i, const RangeImage& image_j, const Raster<std::uint8_t>* edges_j,
-                            const LocusConfig& config, IconicMethod method, const IconicOptions& options) {
-  // Image J in the frame the rover believes; ν starts at the identity (it trusts its belief).
-  const LocusMapper mapper(image_j, edges_j, config);
-  switch (method) {
-    case IconicMethod::Descent: return iconicGradientDescent(map_i, mapper, PoseVector::Zero(), options);
-    case IconicMethod::Weighted: return iconicWeighted(map_i, mapper, PoseVector::Zero(), options);
-    case IconicMethod::LevenbergMarquardt: break;
-  }
-  return iconicLevenbergMarquardt(map_i, mapper, PoseVector::Zero(), options);
-}
-
-Eigen::Isometry3d correctedPose(const IconicResult& result, const Eigen::Isometry3d& believed_WS) {
-  return poseFromVector(result.nu).inverse() * believed_WS;
-}
-
 }  // namespace ambler::perception

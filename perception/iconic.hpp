@@ -134,15 +134,7 @@ Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2,
                             const std::vector<Eigen::Vector3d>& reference_normals,
                             const LocusMapper* map1_source);
 
-enum class IconicMethod : std::uint8_t { Descent, LevenbergMarquardt, Weighted };
-
-// Registers range image J against map I as the rover would: image_j carries the pose the rover
-// believes (T_WS in map I's frame), edges_j its edge mask (or null), config the locus settings and
-// sensor model. The estimate ν is the transform from map I's frame to the believed one; the
-// corrected pose of sensor J is poseFromVector(ν)⁻¹·image_j.T_WS (correctedPose).
-IconicResult registerIconic(const ElevationMap& map_i, const RangeImage& image_j, const Raster<std::uint8_t>* edges_j,
-                            const LocusConfig& config, IconicMethod method, const IconicOptions& options = {});
-Eigen::Isometry3d correctedPose(const IconicResult& result, const Eigen::Isometry3d& believed_WS);
+// Registering a view with these (the believed pose, map J, every method): perception/registration.hpp.
 
 // ∂R/∂r_k for R = exp([r]×) (k = 0, 1, 2): (r_k·[r]× + [r × (I − R)·e_k]×)·R / |r|², and [e_k]× at
 // r = 0.

@@ -184,6 +184,7 @@ TEST(Iconic, DescentAndLevenbergMarquardtRecoverTheTransform) {
   start += (PoseVector() << 0.005, -0.005, 0.03, 0.1, -0.08, 0.03).finished();
   const PoseError initial = poseError(truth, poseFromVector(start));
   ASSERT_GT(initial.translation_m, 0.1);
+  enum class IconicMethod { LevenbergMarquardt, Weighted, Descent };
   for (const IconicMethod method : {IconicMethod::LevenbergMarquardt, IconicMethod::Weighted, IconicMethod::Descent}) {
     const char* name = method == IconicMethod::Descent ? "descent" : method == IconicMethod::Weighted ? "weighted" : "LM";
     const IconicResult res = method == IconicMethod::LevenbergMarquardt ? iconicLevenbergMarquardt(map1, mapper, start)
