@@ -21,6 +21,18 @@
 namespace ambler::eval {
 namespace {
 
+// The number in `column` of data row `row` of a results.csv (row 0 is the header), NaN if absent.
+double csvValue(const std::vector<std::vector<std::string>>& csv, std::size_t row, const std::string& column) {
+  const auto& header = csv.front();
+  const auto it = std::find(header.begin(), header.end(), column);
+  EXPECT_NE(it, header.end()) << column;
+  if (it == header.end()) return std::numeric_limits<double>::quiet_NaN();
+  const std::string& text = csv[row][std::size_t(it - header.begin())];
+  double v = std::numeric_limits<double>::quiet_NaN();
+  std::from_chars(text.data(), text.data() + text.size(), v);
+  return v;
+}
+
 namespace fs = std::filesystem;
 
 std::string slurp(const fs::path& file) {
@@ -92,15 +104,7 @@ TEST(Experiment, QuickRunWritesTablesPlotsAndCsvsDeterministically) {
   const auto csv = parseResultsCsv(slurp(a.dir / "tilt_noise" / "results.csv"));
   ASSERT_TRUE(csv);
   ASSERT_EQ(csv->size(), 5u);
-  const auto& header = csv->front();
-  const auto value = [&](std::size_t row, const std::string& column) {
-    const auto it = std::find(header.begin(), header.end(), column);
-    EXPECT_NE(it, header.end()) << column;
-    const std::string& text = (*csv)[row][std::size_t(it - header.begin())];
-    double v = std::numeric_limits<double>::quiet_NaN();
-    std::from_chars(text.data(), text.data() + text.size(), v);
-    return v;
-  };
+  const auto value = [&](std::size_t row, const std::string& column) { return csvValue(*csv, row, column); };
   EXPECT_LT(value(1, "map.0.rms_error_m"), 2e-3);
   EXPECT_LT(value(1, "map_cartesian.0.rms_error_m"), 2e-3);
   EXPECT_GT(value(2, "map.0.rms_error_m"), 5e-3);
@@ -248,15 +252,7 @@ TEST(ExperimentMatching, QuickRunReportsEveryMethodAtTheCorners) {
   const auto csv = parseResultsCsv(slurp(out.dir / "basin" / "results.csv"));
   ASSERT_TRUE(csv);
   ASSERT_EQ(csv->size(), 5u);
-  const auto& header = csv->front();
-  const auto value = [&](std::size_t row, const std::string& column) {
-    const auto it = std::find(header.begin(), header.end(), column);
-    EXPECT_NE(it, header.end()) << column;
-    const std::string& text = (*csv)[row][std::size_t(it - header.begin())];
-    double v = std::numeric_limits<double>::quiet_NaN();
-    std::from_chars(text.data(), text.data() + text.size(), v);
-    return v;
-  };
+  const auto value = [&](std::size_t row, const std::string& column) { return csvValue(*csv, row, column); };
   for (std::size_t run = 0; run < 4; ++run)
     for (int m = 0; m < 4; ++m) {
       const std::string k = "registration." + std::to_string(m) + ".";
