@@ -230,6 +230,31 @@ TEST(Iconic, PlaneIsDegenerateInXYAndYaw) {
   EXPECT_LT(std::abs(T.linear()(2, 0)) + std::abs(T.linear()(2, 1)), 1e-3);
 }
 
+// A sinusoid along x, z = A·sin(2πx/λ), slides into itself along y: its point-to-plane Jacobian
+// rows (p × n, n) (the residual n·(R·p + t − q) differentiated at the identity) leave exactly ty
+// free. degeneracy() on Σ J·Jᵀ over a 10 cm grid names ty alone; a sinusoid along both axes none.
+TEST(Iconic, SinusoidAlongXIsDegenerateInY) {
+  const double A = 0.1, lambda = 1.0, k = 2 * M_PI / lambda;
+  const auto jtj = [&](bool both) {
+    Matrix6d H = Matrix6d::Zero();
+    for (double x = -3; x <= 3; x += 0.1)
+      for (double y = 1.5; y <= 8; y += 0.1) {
+        const double zx = A * k * std::cos(k * x), zy = both ? A * k * std::cos(k * y) : 0.0;
+        const double z = A * std::sin(k * x) + (both ? A * std::sin(k * y) : 0.0);
+        const Eigen::Vector3d p(x, y, z), n = Eigen::Vector3d(-zx, -zy, 1).normalized();
+        Eigen::Matrix<double, 6, 1> J;
+        J << p.cross(n), n;
+        H += J * J.transpose();
+      }
+    return H;
+  };
+  const double half_diagonal = 0.5 * std::hypot(6.0, 6.5);
+  const Degeneracy along_x = degeneracy(jtj(false), half_diagonal);
+  EXPECT_TRUE(along_x.degenerate);
+  EXPECT_EQ(along_x.free_directions, std::vector<std::string>{"ty"});
+  EXPECT_FALSE(degeneracy(jtj(true), half_diagonal).degenerate);
+}
+
 }  // namespace
 }  // namespace ambler::perception
 
