@@ -397,10 +397,15 @@ perception::ScanToMapConfig MapSpec::scanToMapConfig() const {
   return c;
 }
 
+perception::LocusConfig locusConfig(const Scenario& sc) {
+  perception::LocusConfig c = sc.map->scanToMapConfig().locus;
+  c.sensor = sc.sensor;
+  return c;
+}
+
 perception::RegistrationConfig registrationConfig(const Scenario& sc) {
   perception::RegistrationConfig c;
-  c.locus = sc.map->scanToMapConfig().locus;
-  c.locus.sensor = sc.sensor;
+  c.locus = locusConfig(sc);
   c.prior_translation_m = std::sqrt(3.0) * kMaxInitialTranslationM;
   c.prior_rotation_deg = kMaxInitialRotationDeg;
   return c;

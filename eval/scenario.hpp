@@ -101,6 +101,8 @@ struct Scenario {
 // section, and the rover's prior on its dead-reckoning error, the bounds of the initial_error key
 // (|x|, |y|, |z| ≤ 3 m, each angle ≤ 30°), not the error itself.
 perception::RegistrationConfig registrationConfig(const Scenario& sc);
+// The locus settings of the map section with the scenario's sensor model: how any stage maps a scan.
+perception::LocusConfig locusConfig(const Scenario& sc);
 
 // Loads and validates a scenario. Throws ScenarioError naming the file and the key for a missing
 // file, bad YAML, an unknown key, a wrong type or an out-of-range value.

@@ -26,4 +26,12 @@ ScanMap scanToMap(const RangeImage& measured, const SensorModel& sensor, const E
   return out;
 }
 
+ElevationMap mapAtPose(const ScanMap& scan, const Eigen::Isometry3d& T_WS, const MapGrid& grid,
+                       const LocusConfig& locus) {
+  RangeImage image = scan.image;
+  image.T_WS = T_WS;
+  const LocusMapper mapper(image, scan.edges ? &*scan.edges : nullptr, locus, grid.T_WM);
+  return mapper.map(grid);
+}
+
 }  // namespace ambler::perception

@@ -41,4 +41,10 @@ struct ScanMap {
 ScanMap scanToMap(const RangeImage& measured, const SensorModel& sensor, const Eigen::Isometry3d& T_WS,
                   const MapGrid& grid, const ScanToMapConfig& config = {});
 
+// The same scan mapped again from another pose (a believed or corrected one) on any grid: the
+// unwrapped image and its edges do not depend on the pose, so only the locus map is made again.
+// Gives the bits scanToMap gives for the measured image at that pose.
+ElevationMap mapAtPose(const ScanMap& scan, const Eigen::Isometry3d& T_WS, const MapGrid& grid,
+                       const LocusConfig& locus);
+
 }  // namespace ambler::perception

@@ -67,15 +67,16 @@ void featurePictures(const RunState& s) {
   }
 }
 
-// Image J mapped on map I's grid (perception::scanToMap, as the map stage maps it) at the believed
-// pose and at each method's estimate: matching/pair_I_J_difference_METHOD.png and
+// Scan J mapped on map I's grid (perception::mapAtPose: the map stage's unwrapped image and edges)
+// at the believed pose and at each method's estimate: matching/pair_I_J_difference_METHOD.png and
 // pair_I_J_convergence.png.
 void pairPictures(const RunState& s, int i, int j, const Eigen::Isometry3d& believed_WS,
                   const std::vector<Registered>& registered) {
   const Scenario& sc = s.scenario;
   const perception::ElevationMap& map_i = s.views[i].locus->map;
+  const perception::LocusConfig locus = locusConfig(sc);
   const auto mapJ = [&](const Eigen::Isometry3d& T_WS) {
-    return perception::scanToMap(s.views[j].scan->image, sc.sensor, T_WS, map_i.grid(), sc.map->scanToMapConfig()).map;
+    return perception::mapAtPose(*s.views[j].locus, T_WS, map_i.grid(), locus);
   };
   const perception::ElevationMap before = mapJ(believed_WS);
   std::vector<perception::ElevationMap> after;
@@ -96,6 +97,7 @@ void run(RunState& s) {
   std::filesystem::create_directories(s.out / "matching");
   s.metrics["registration"] = nlohmann::ordered_json::array();
   featurePictures(s);
+  const perception::RegistrationConfig config = registrationConfig(sc);
   for (const auto& [i, j] : spec.pairs) {
     const ViewState& vi = s.views[i];
     const ViewState& vj = s.views[j];
@@ -105,7 +107,6 @@ void run(RunState& s) {
     // Image J as the rover has it: unwrapped, its edges, at the believed pose.
     perception::RangeImage image = vj.locus->image;
     image.T_WS = believed_WS;
-    const perception::RegistrationConfig config = registrationConfig(sc);
     const perception::ElevationMap& map_i = vi.locus->map;
     const perception::MapGrid grid_j = perception::believedGrid(map_i.grid(), vi.T_WS, believed_WS);
     std::vector<Registered> registered;

@@ -58,18 +58,14 @@ void run(RunState& s) {
   } else {
     for (std::size_t k = 0; k < s.views.size(); ++k) placements[k] = {true, s.views[k].T_WS, {}};
   }
-  perception::LocusConfig locus = sc.map->scanToMapConfig().locus;
-  locus.sensor = sc.sensor;
+  const perception::LocusConfig locus = locusConfig(sc);
   perception::ElevationMap composite(grid);
   const perception::ElevationMap truth = s.truth->elevation(grid);
   perception::Raster<std::uint8_t> visible = perception::Raster<std::uint8_t>::Zero(grid.rows, grid.cols);
   for (std::size_t k = 0; k < s.views.size(); ++k) {
     const ViewState& v = s.views[k];
     // The scan as the map stage had it (unwrapped, its edges), at the composite's pose for it.
-    perception::RangeImage image = v.locus->image;
-    image.T_WS = placements[k].T_WS;
-    const perception::LocusMapper mapper(image, v.locus->edges ? &*v.locus->edges : nullptr, locus);
-    perception::ElevationMap map = mapper.map(grid);
+    perception::ElevationMap map = perception::mapAtPose(*v.locus, placements[k].T_WS, grid, locus);
     // Each link's pose covariance, first order and independent: variances add.
     perception::Raster<float> extra = perception::Raster<float>::Zero(grid.rows, grid.cols);
     bool any = false;

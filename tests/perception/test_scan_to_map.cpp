@@ -140,6 +140,29 @@ TEST(ScanToMap, TranslatedFrameAgreesWithTheWorldFrameCellByCell) {
   EXPECT_GT(known, 5000);
 }
 
+// mapAtPose: a scan mapped again from another pose, in another frame, gives the bits scanToMap
+// gives for the measured image at that pose (unwrapping and edges do not depend on the pose), GNC
+// edges on.
+TEST(ScanToMap, MapAtPoseIsScanToMapAtThatPose) {
+  const SensorModel sensor = exactSensor();
+  const RangeImage img = planeImage(kPlane, kSensor);
+  const Eigen::Isometry3d other = sensorPose({0.5, -5.5, 3.4}, Eigen::Vector3d(2, -30, 25) * kDeg);
+  const MapGrid grid = MapGrid::covering(-4, 4, -2, 8, 0.1, mapFrame({0.5, -0.25, 0.1}, 10 * kDeg));
+  const ScanMap at_first = scanToMap(img, sensor, kSensor, grid);
+  LocusConfig locus;
+  locus.sensor = sensor;
+  const ElevationMap again = mapAtPose(at_first, other, grid, locus);
+  const ElevationMap direct = scanToMap(img, sensor, other, grid).map;
+  ASSERT_GT(direct.count(CellState::Known), 1000);
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      ASSERT_EQ(again.stateAt(r, c), direct.stateAt(r, c)) << r << " " << c;
+      if (direct.stateAt(r, c) != CellState::Known) continue;
+      ASSERT_EQ(again.elevation()(r, c), direct.elevation()(r, c));
+      ASSERT_EQ(again.sigma()(r, c), direct.sigma()(r, c));
+    }
+}
+
 // (c) Frames and grids that cannot be mapped are refused.
 TEST(ScanToMap, RefusesTiltedFramesEmptyGridsAndAForeignFrame) {
   const SensorModel sensor = exactSensor();
