@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "eval/io.hpp"
+#include "eval/pair_registration.hpp"
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
 #include "perception/cartesian_mapper.hpp"
@@ -288,35 +289,30 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
   const perception::MapGrid grid = sc.map->grid();
   const perception::ScanToMapConfig config = sc.map->scanToMapConfig();
   const perception::ScanMap map_i = perception::scanToMap(scanner.scan(T_i, viewSeed(sc.seed, i)).image, sc.sensor, T_i, grid, config);
-  perception::ScanMap map_j = perception::scanToMap(scanner.scan(T_j, viewSeed(sc.seed, j)).image, sc.sensor, T_j, grid, config);
-  // Image J at the pose the rover believes, as the match stage hands it over.
-  const Eigen::Isometry3d T_IJ = T_i.inverse() * T_j;
-  const Eigen::Isometry3d T_0 = sc.matching->initialEstimate(T_IJ);
-  const Eigen::Isometry3d believed = T_i * T_0;
-  map_j.image.T_WS = believed;
-  const perception::RegistrationConfig reg_config = registrationConfig(sc);
-  const perception::MapGrid grid_j = perception::believedGrid(grid, T_i, believed);
-  const auto* edges = map_j.edges ? &*map_j.edges : nullptr;
+  const perception::ScanMap map_j = perception::scanToMap(scanner.scan(T_j, viewSeed(sc.seed, j)).image, sc.sensor, T_j, grid, config);
+  const PairRegistration pair(map_i, T_i, map_j, T_j, registrationConfig(sc), sc.matching->methods);
+  // From the rover's belief, as the match stage starts.
+  const Eigen::Isometry3d T_0 = sc.matching->initialEstimate(pair.trueRelative());
 
   nlohmann::ordered_json j_out, methods = nlohmann::ordered_json::array();
   std::printf("ambler bench match (%s, views %d-%d, %dx%d cells of %.2f m; medians of %d)\n", sc.name.c_str(), i, j,
               grid.rows, grid.cols, grid.cell, opt.repetitions);
   std::printf("  %-15s %10s %12s %12s %14s %12s\n", "method", "iterations", "1 thread ms", "all ms", "error m", "error deg");
   for (const MatchMethod m : sc.matching->methods) {
-    perception::RegistrationResult res;
-    const auto once = [&] { res = perception::registerViews(map_i.map, map_j.image, edges, grid_j, m, reg_config); };
+    PairResult res;
+    const auto once = [&] { res = pair.run(m, T_0); };
     double one = 0;
     {
       tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
       one = timeMedian(opt.repetitions, once);
     }
     const double all = timeMedian(opt.repetitions, once);
-    const perception::PoseError err = perception::poseError(T_IJ, T_i.inverse() * perception::poseFromVector(res.nu).inverse() * believed);
-    std::printf("  %-15s %10d %12.1f %12.1f %14.4f %12.3f\n", matchMethodName(m), res.iterations, one * 1e3, all * 1e3,
+    const perception::PoseError err = res.error;
+    std::printf("  %-15s %10d %12.1f %12.1f %14.4f %12.3f\n", matchMethodName(m), res.reg.iterations, one * 1e3, all * 1e3,
                 err.translation_m, err.rotation_deg);
     nlohmann::ordered_json e;
     e["method"] = matchMethodName(m);
-    e["iterations"] = res.iterations;
+    e["iterations"] = res.reg.iterations;
     e["ms_1t"] = one * 1e3;
     e["ms_all"] = all * 1e3;
     e["translation_error_m"] = err.translation_m;

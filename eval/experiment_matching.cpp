@@ -6,13 +6,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <opencv2/imgproc.hpp>
 #include <string>
 #include <vector>
 
 #include "eval/experiment.hpp"
 #include "eval/experiment_internal.hpp"
 #include "eval/io.hpp"
+#include "eval/match_figures.hpp"
 
 namespace ambler::eval {
 namespace {
@@ -232,54 +232,29 @@ std::string report(const Basin& b, bool quick) {
 
 // ---- the plot: one panel per method, a cell per initial error coloured by its success fraction --
 
-const cv::Scalar kInk(0, 0, 0), kPaper(255, 255, 255), kNone(242, 242, 242), kAll(180, 119, 31);  // BGR
-
-void centred(cv::Mat& img, const std::string& s, cv::Point centre, double scale, const cv::Scalar& colour,
-             int thickness = 1) {
-  int baseline = 0;
-  const cv::Size size = cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
-  cv::putText(img, s, {centre.x - size.width / 2, centre.y + size.height / 2}, cv::FONT_HERSHEY_SIMPLEX, scale, colour,
-              thickness, cv::LINE_AA);
-}
-
 cv::Mat basinPanel(const Basin& b, std::size_t m) {
-  constexpr int kWidth = 620, kHeight = 470, kLeft = 110, kTop = 62, kBottom = 62, kRight = 20;
-  cv::Mat img(kHeight, kWidth, CV_8UC3, kPaper);
-  centred(img, b.methods()[m], {kWidth / 2, 20}, 0.7, kInk, 2);
-  centred(img, "successes / seeds, median translation error", {kWidth / 2, 46}, 0.45, kInk);
-  const int cw = (kWidth - kLeft - kRight) / int(std::max<std::size_t>(1, b.cols()));
-  const int ch = (kHeight - kTop - kBottom) / int(std::max<std::size_t>(1, b.rows()));
-  for (std::size_t i = 0; i < b.rows(); ++i) {
-    const int y0 = kTop + int(b.rows() - 1 - i) * ch;  // the smallest translation at the bottom
-    centred(img, b.rowLabel(i), {kLeft / 2 + 8, y0 + ch / 2}, 0.5, kInk);
+  SuccessGrid g;
+  g.title = b.methods()[m];
+  g.subtitle = "successes / seeds, median translation error";
+  g.row_axis = "initial translation";
+  g.col_axis = "initial rotation";
+  for (std::size_t i = 0; i < b.rows(); ++i) g.row_labels.push_back(b.rowLabel(i));
+  for (std::size_t j = 0; j < b.cols(); ++j) g.col_labels.push_back(b.colLabel(j, " deg"));
+  for (std::size_t i = 0; i < b.rows(); ++i)
     for (std::size_t j = 0; j < b.cols(); ++j) {
-      const int x0 = kLeft + int(j) * cw;
       const auto& runs = b.cell(i, j);
-      const double f = runs.empty() ? 0 : b.successes(m, runs) / double(runs.size());
-      const cv::Scalar fill = runs.empty() ? kPaper : kNone * (1 - f) + kAll * f;
-      cv::rectangle(img, {x0, y0, cw, ch}, fill, cv::FILLED);
-      cv::rectangle(img, {x0, y0, cw + 1, ch + 1}, kPaper, 2);
-      if (runs.empty()) continue;
-      const cv::Scalar ink = f > 0.5 ? kPaper : kInk;
-      centred(img, std::to_string(b.successes(m, runs)) + "/" + std::to_string(runs.size()),
-              {x0 + cw / 2, y0 + ch / 2 - 10}, 0.7, ink, 2);
-      centred(img, number(100 * median(b.values(m, runs, "translation_error_m"))) + " cm",
-              {x0 + cw / 2, y0 + ch / 2 + 16}, 0.45, ink);
+      g.successes.push_back(runs.empty() ? 0 : b.successes(m, runs));
+      g.trials.push_back(int(runs.size()));
+      g.notes.push_back(runs.empty() ? "" : number(100 * median(b.values(m, runs, "translation_error_m"))) + " cm");
     }
-  }
-  for (std::size_t j = 0; j < b.cols(); ++j)
-    centred(img, b.colLabel(j, " deg"), {kLeft + int(j) * cw + cw / 2, kHeight - kBottom + 16}, 0.5, kInk);
-  centred(img, "initial rotation", {kLeft + int(b.cols()) * cw / 2, kHeight - 16}, 0.5, kInk);
-  centred(img, "initial", {kLeft / 2 + 8, kTop - 6}, 0.45, kInk);
-  centred(img, "translation", {kLeft / 2 + 8, kTop + 10}, 0.45, kInk);
-  return img;
+  return successHeatmap(g);
 }
 
 cv::Mat basinPlot(const Basin& b) {
   std::vector<cv::Mat> panels;
   for (std::size_t m = 0; m < b.methods().size(); ++m) panels.push_back(basinPanel(b, m));
   const int cols = panels.size() > 1 ? 2 : 1;
-  while (panels.size() % std::size_t(cols)) panels.emplace_back(panels.front().size(), CV_8UC3, kPaper);
+  while (panels.size() % std::size_t(cols)) panels.emplace_back(panels.front().size(), CV_8UC3, cv::Scalar(255, 255, 255));
   return grid2(panels, cols);
 }
 

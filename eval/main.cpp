@@ -5,6 +5,7 @@
 #include <exception>
 #include <iostream>
 
+#include "eval/basin.hpp"
 #include "eval/bench.hpp"
 #include "eval/experiment.hpp"
 #include "eval/runner.hpp"
@@ -43,6 +44,29 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep->add_flag("--timing", sweep_timing, "Also the timing_s.* columns (rows then differ from run to run)");
   sweep->add_flag("--quiet,-q", sweep_quiet, "No progress lines on stderr");
+
+  std::string basin_file, basin_out, basin_shard, basin_t, basin_r;
+  BasinOptions basin_opt;
+  bool basin_merge = false, basin_quiet = false;
+  auto* basin = app.add_subcommand("basin", "The convergence basin of every matching method of a scenario on its "
+                                            "first pair: DIR/basin.csv, DIR/basin_METHOD.png, "
+                                            "DIR/basin_boundary.png (see docs/basin.md).");
+  basin->add_option("scenario", basin_file, "Scenario YAML with map and matching sections")->required();
+  basin->add_option("--out,-o", basin_out, "Basin directory to write (created if missing)")->required();
+  auto* basin_t_opt = basin->add_option("--translation-m", basin_t, "Initial translation magnitudes, metres, comma-separated "
+                                                "(default 0,0.5,1,1.5,2,2.5,3)");
+  auto* basin_r_opt = basin->add_option("--rotation-deg", basin_r, "Initial rotation magnitudes, degrees, comma-separated "
+                                               "(default 0,5,10,15,20,25,30)");
+  basin->add_option("--trials", basin_opt.grid.trials, "Seeded trials per cell")->capture_default_str();
+  auto* basin_shard_opt = basin->add_option("--shard", basin_shard,
+                                            "Run only shard K of N (1-based): the draws u with u mod N = K-1, into "
+                                            "DIR/basin.shard-K-of-N.csv");
+  basin->add_flag("--merge", basin_merge, "Merge DIR/basin.shard-*-of-N.csv into DIR/basin.csv and draw the "
+                                          "figures; runs nothing (give the same grid options)");
+  basin->add_option("--jobs,-j", basin_opt.jobs, "Draws registered at once (each already uses every core)")
+      ->capture_default_str();
+  basin->add_flag("--timing", basin_opt.timing, "Fill the time_s column (rows then differ from run to run)");
+  basin->add_flag("--quiet,-q", basin_quiet, "No progress lines on stderr");
 
   auto* bench = app.add_subcommand("bench", "Measure speed; prints a table of medians.");
   bench->require_subcommand(1);
@@ -131,6 +155,20 @@ int main(int argc, char** argv) {
         mergeSweep(sw, sweep_out, !sweep_quiet);
       else
         runSweep(sw, opt);
+    } else if (*basin) {
+      basin_opt.out = basin_out;
+      basin_opt.progress = !basin_quiet;
+      if (basin_t_opt->count()) basin_opt.grid.translation_m = parseBasinAxis(basin_t, "--translation-m", 100.0);
+      if (basin_r_opt->count()) basin_opt.grid.rotation_deg = parseBasinAxis(basin_r, "--rotation-deg", 180.0);
+      if (basin_shard_opt->count()) basin_opt.shard = parseShard(basin_shard);
+      if (basin_merge && (basin_opt.shard || basin_opt.timing))
+        throw BasinError(std::string("--merge: merges the shards' files; ") +
+                         (basin_opt.shard ? "--shard" : "--timing") + " does not apply");
+      const Scenario sc = loadScenario(basin_file);
+      if (basin_merge)
+        mergeBasin(sc, basin_opt);
+      else
+        runBasin(sc, basin_opt);
     } else if (*locus_vs_cartesian) {
       exp_opt.out = exp_out;
       exp_opt.sweeps = exp_sweeps;

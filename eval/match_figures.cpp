@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <stdexcept>
 
 #include "eval/figures.hpp"
@@ -355,6 +356,94 @@ void writePairPictures(const std::filesystem::path& dir, int i, int j, const Ele
     writePng(dir / (stem + "_convergence.png"),
              convergencePlot(traces, title + ": views " + std::to_string(i) + "-" + std::to_string(j) +
                                          ", residual per iteration"));
+}
+
+namespace {
+
+const cv::Scalar kInk(0, 0, 0), kPaper(255, 255, 255), kNone(242, 242, 242), kAll(180, 119, 31);  // BGR
+
+void centred(cv::Mat& img, const std::string& s, cv::Point centre, double scale, const cv::Scalar& colour,
+             int thickness = 1) {
+  int baseline = 0;
+  const cv::Size size = cv::getTextSize(s, cv::FONT_HERSHEY_SIMPLEX, scale, thickness, &baseline);
+  cv::putText(img, s, {centre.x - size.width / 2, centre.y + size.height / 2}, cv::FONT_HERSHEY_SIMPLEX, scale, colour,
+              thickness, cv::LINE_AA);
+}
+
+}  // namespace
+
+cv::Mat successHeatmap(const SuccessGrid& g, int width, int height) {
+  const std::size_t rows = g.row_labels.size(), cols = g.col_labels.size();
+  if (g.successes.size() != rows * cols || g.trials.size() != rows * cols ||
+      (!g.notes.empty() && g.notes.size() != rows * cols))
+    throw std::invalid_argument("successHeatmap: successes, trials and notes must have rows x cols entries");
+  const int left = 110, top = 62, bottom = 62, right = 20;
+  cv::Mat img(height, width, CV_8UC3, kPaper);
+  centred(img, g.title, {width / 2, 20}, 0.7, kInk, 2);
+  centred(img, g.subtitle, {width / 2, 46}, 0.45, kInk);
+  const int cw = (width - left - right) / int(std::max<std::size_t>(1, cols));
+  const int ch = (height - top - bottom) / int(std::max<std::size_t>(1, rows));
+  const double text = std::clamp(std::min(cw / 110.0, ch / 60.0), 0.35, 0.7);
+  for (std::size_t i = 0; i < rows; ++i) {
+    const int y0 = top + int(rows - 1 - i) * ch;  // row 0 at the bottom
+    centred(img, g.row_labels[i], {left / 2 + 8, y0 + ch / 2}, 0.5, kInk);
+    for (std::size_t j = 0; j < cols; ++j) {
+      const std::size_t k = i * cols + j;
+      const int x0 = left + int(j) * cw;
+      const int n = g.trials[k];
+      const double f = n ? g.successes[k] / double(n) : 0;
+      cv::rectangle(img, {x0, y0, cw, ch}, n ? kNone * (1 - f) + kAll * f : kPaper, cv::FILLED);
+      cv::rectangle(img, {x0, y0, cw + 1, ch + 1}, kPaper, 2);
+      if (!n) continue;
+      const cv::Scalar ink = f > 0.5 ? kPaper : kInk;
+      const bool note = !g.notes.empty() && !g.notes[k].empty();
+      centred(img, std::to_string(g.successes[k]) + "/" + std::to_string(n),
+              {x0 + cw / 2, y0 + ch / 2 - (note ? int(14 * text) : 0)}, text, ink, text > 0.5 ? 2 : 1);
+      if (note) centred(img, g.notes[k], {x0 + cw / 2, y0 + ch / 2 + int(22 * text)}, 0.65 * text, ink);
+    }
+  }
+  for (std::size_t j = 0; j < cols; ++j)
+    centred(img, g.col_labels[j], {left + int(j) * cw + cw / 2, height - bottom + 16}, std::min(0.5, 0.9 * text), kInk);
+  centred(img, g.col_axis, {left + int(cols) * cw / 2, height - 16}, 0.5, kInk);
+  const auto space = g.row_axis.find(' ');
+  centred(img, g.row_axis.substr(0, space), {left / 2 + 8, top - 6}, 0.45, kInk);
+  if (space != std::string::npos) centred(img, g.row_axis.substr(space + 1), {left / 2 + 8, top + 10}, 0.45, kInk);
+  return img;
+}
+
+cv::Mat basinBoundaryPlot(const std::vector<double>& translations_m, const std::vector<double>& rotations_deg,
+                          const std::vector<BasinBoundary>& methods, double level, const std::string& title) {
+  const std::size_t rows = translations_m.size(), cols = rotations_deg.size();
+  PlotSpec spec;
+  spec.title = title;
+  spec.x_label = "initial rotation (deg)";
+  spec.y_label = "initial translation (m) reached";
+  // Methods with the same boundary would hide each other: each line is lifted by a step of 1 % of
+  // the translation range, centred on the true values (said in the caption).
+  const double span = std::max(translations_m.back() - translations_m.front(), 1e-3);
+  for (std::size_t k = 0; k < methods.size(); ++k) {
+    const BasinBoundary& m = methods[k];
+    if (m.rate.size() != rows * cols)
+      throw std::invalid_argument("basinBoundaryPlot: " + m.label + ": rates must have rows x cols entries");
+    const double lift = (double(k) - 0.5 * double(methods.size() - 1)) * 0.01 * span;
+    Series s;
+    s.label = m.label;
+    s.markers = true;
+    for (std::size_t j = 0; j < cols; ++j) {
+      double reached = std::numeric_limits<double>::quiet_NaN();
+      for (std::size_t i = 0; i < rows && m.rate[i * cols + j] >= level; ++i) reached = translations_m[i];
+      s.x.push_back(rotations_deg[j]);
+      s.y.push_back(reached + lift);
+    }
+    spec.series.push_back(std::move(s));
+  }
+  // The axes span the whole grid (invisible points at its corners) and a strip on the right for
+  // the legend.
+  const double room = rotations_deg.back() + 0.35 * std::max(rotations_deg.back() - rotations_deg.front(), 1.0);
+  spec.series.push_back(Series{"", {rotations_deg.front(), room},
+                               {translations_m.front(), translations_m.back()}, cv::Scalar(255, 255, 255), false,
+                               false});
+  return renderPlot(spec);
 }
 
 }  // namespace ambler::eval

@@ -93,4 +93,30 @@ void writePairPictures(const std::filesystem::path& dir, int i, int j, const per
                        const perception::ElevationMap& before, const std::vector<RegisteredMap>& methods,
                        const std::string& title);
 
+// A grid of success rates over initial errors (a convergence basin): row 0 at the bottom.
+struct SuccessGrid {
+  std::string title, subtitle;   // the method; what a cell shows (criterion, trials)
+  std::string row_axis, col_axis;
+  std::vector<std::string> row_labels, col_labels;
+  std::vector<int> successes, trials;  // row-major; a cell of 0 trials is left blank
+  std::vector<std::string> notes;      // row-major: a second line under "k/n" (empty: none)
+};
+
+// One cell per initial error, filled from light grey (no success) to blue (all), "k/n" in it and
+// its note below; the axes labelled with the values. Throws std::invalid_argument when the
+// vectors do not match the labels' grid.
+cv::Mat successHeatmap(const SuccessGrid& grid, int width = 620, int height = 470);
+
+// The 95 % basin boundary of each method: over the column values x (initial rotation), the
+// largest row value y (initial translation) up to which every cell of that column succeeds at
+// least `level` (NaN, a break in the line, when the first cell already fails). One line with
+// markers per method, method k lifted by (k − (M−1)/2) % of the translation range so that equal
+// boundaries stay visible; the axes cover the whole grid and a strip on the right for the legend.
+struct BasinBoundary {
+  std::string label;
+  std::vector<double> rate;  // row-major over rows (translations) × cols (rotations), in [0, 1]
+};
+cv::Mat basinBoundaryPlot(const std::vector<double>& translations_m, const std::vector<double>& rotations_deg,
+                          const std::vector<BasinBoundary>& methods, double level, const std::string& title);
+
 }  // namespace ambler::eval

@@ -377,8 +377,23 @@ const char* matchMethodName(MatchMethod m) {
     case MatchMethod::FeaturesIconic: return "features+iconic";
     case MatchMethod::IconicLm: return "iconic_lm";
     case MatchMethod::IconicWeighted: return "iconic_weighted";
+    case MatchMethod::IcpPointToPlane: return "icp_point_to_plane";
+    case MatchMethod::Gicp: return "gicp";
+    case MatchMethod::Fgr: return "fgr";
   }
   return "?";
+}
+
+std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m) {
+  using R = perception::RegistrationMethod;
+  switch (m) {
+    case MatchMethod::Features: return R::Features;
+    case MatchMethod::Iconic: return R::Iconic;
+    case MatchMethod::FeaturesIconic: return R::FeaturesIconic;
+    case MatchMethod::IconicLm: return R::IconicLm;
+    case MatchMethod::IconicWeighted: return R::IconicWeighted;
+    default: return std::nullopt;
+  }
 }
 
 

@@ -50,8 +50,20 @@ struct MapSpec {
   perception::ScanToMapConfig scanToMapConfig() const;
 };
 
-// The registration methods a `matching:` section may name (docs/scenario.md, "matching").
-using MatchMethod = perception::RegistrationMethod;
+// The registration methods a `matching:` section may name (docs/scenario.md, "matching"): the
+// paper's (perception::registerViews) and the Open3D peers (eval/peers/).
+enum class MatchMethod : std::uint8_t {
+  Features,
+  Iconic,
+  FeaturesIconic,
+  IconicLm,
+  IconicWeighted,
+  IcpPointToPlane,  // peers: Open3D's point-to-plane ICP,
+  Gicp,             // generalized ICP,
+  Fgr,              // fast global registration on FPFH features, refined by point-to-plane ICP
+};
+// The paper's method behind m, or nullopt for a peer.
+std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m);
 // The scenario's name of a method ("features+iconic"; in file names, eval/match_figures.hpp's
 // methodFileName).
 const char* matchMethodName(MatchMethod m);

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "eval/sweep.hpp"
@@ -23,7 +24,11 @@ std::string readText(const std::filesystem::path& file, const std::string& who);
 std::string csvLine(const std::vector<std::string>& cells);
 // The run index and the axis cells of run k: the first columns of its row.
 std::vector<std::string> axisCells(const Sweep& sweep, std::size_t k);
-// results.shard-K-of-N.csv
-std::string shardName(const Shard& s);
+// <stem>.shard-K-of-N.csv (stem "results" for a sweep, "basin" for a basin)
+std::string shardName(const Shard& s, const std::string& stem = "results");
+// The <stem>.shard-K-of-N.csv files in `out`, ordered by K: all N of one split. Throws SweepError
+// naming the directory or the file when there are none, a split is mixed or a shard is missing.
+std::vector<std::pair<Shard, std::filesystem::path>> shardFiles(const std::filesystem::path& out,
+                                                                const std::string& stem);
 
 }  // namespace ambler::eval::sweep_detail

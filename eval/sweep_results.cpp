@@ -97,21 +97,15 @@ std::vector<std::string> axisCells(const Sweep& sweep, std::size_t k) {
   return cells;
 }
 
-std::string shardName(const Shard& s) {
-  return "results.shard-" + std::to_string(s.index) + "-of-" + std::to_string(s.count) + ".csv";
+std::string shardName(const Shard& s, const std::string& stem) {
+  return stem + ".shard-" + std::to_string(s.index) + "-of-" + std::to_string(s.count) + ".csv";
 }
 
-}  // namespace sweep_detail
-
-std::optional<std::vector<std::vector<std::string>>> parseResultsCsv(const std::string& text) {
-  return parseCsv(text);
-}
-
-fs::path mergeSweep(const Sweep& sweep, const fs::path& out, bool progress) {
+std::vector<std::pair<Shard, fs::path>> shardFiles(const fs::path& out, const std::string& stem) {
   const std::string where = out.string();
   std::error_code ec;
   if (!fs::is_directory(out, ec)) throw SweepError(where + ": no such directory");
-  const std::regex pattern(R"(results\.shard-([0-9]{1,9})-of-([0-9]{1,9})\.csv)");
+  const std::regex pattern(stem + R"(\.shard-([0-9]{1,9})-of-([0-9]{1,9})\.csv)");
   std::vector<std::pair<Shard, fs::path>> files;
   for (const auto& entry : fs::directory_iterator(out)) {
     std::smatch m;
@@ -119,7 +113,7 @@ fs::path mergeSweep(const Sweep& sweep, const fs::path& out, bool progress) {
     if (!std::regex_match(name, m, pattern)) continue;
     files.emplace_back(Shard{std::stoi(m[1]), std::stoi(m[2])}, entry.path());
   }
-  if (files.empty()) throw SweepError(where + ": no results.shard-K-of-N.csv files to merge");
+  if (files.empty()) throw SweepError(where + ": no " + stem + ".shard-K-of-N.csv files to merge");
   std::sort(files.begin(), files.end(), [](const auto& a, const auto& b) {
     return std::pair(a.first.count, a.first.index) < std::pair(b.first.count, b.first.index);
   });
@@ -135,10 +129,23 @@ fs::path mergeSweep(const Sweep& sweep, const fs::path& out, bool progress) {
   }
   for (int k = 1; k <= n; ++k) {
     if (std::none_of(files.begin(), files.end(), [&](const auto& f) { return f.first.index == k; })) {
-      throw SweepError((out / shardName(Shard{k, n})).string() + ": missing (shard " + std::to_string(k) +
+      throw SweepError((out / shardName(Shard{k, n}, stem)).string() + ": missing (shard " + std::to_string(k) +
                        " of " + std::to_string(n) + ")");
     }
   }
+  return files;
+}
+
+}  // namespace sweep_detail
+
+std::optional<std::vector<std::vector<std::string>>> parseResultsCsv(const std::string& text) {
+  return parseCsv(text);
+}
+
+fs::path mergeSweep(const Sweep& sweep, const fs::path& out, bool progress) {
+  const std::string where = out.string();
+  const auto files = shardFiles(out, "results");
+  const int n = files.front().first.count;
 
   const std::size_t total = sweep.runs.size();
   std::vector<std::string> axes_header{"run"};

@@ -12,6 +12,7 @@
 
 #include "eval/io.hpp"
 #include "eval/match_figures.hpp"
+#include "eval/pair_registration.hpp"
 #include "eval/stages.hpp"
 #include "perception/registration.hpp"
 #include "perception/rigid_transform.hpp"
@@ -101,30 +102,21 @@ void run(RunState& s) {
   for (const auto& [i, j] : spec.pairs) {
     const ViewState& vi = s.views[i];
     const ViewState& vj = s.views[j];
-    const Eigen::Isometry3d T_IJ = vi.T_WS.inverse() * vj.T_WS;  // the truth, for scoring only
-    const Eigen::Isometry3d T_0 = spec.initialEstimate(T_IJ);     // what the rover believes
-    const Eigen::Isometry3d believed_WS = vi.T_WS * T_0;          // sensor J in the believed world
-    // Image J as the rover has it: unwrapped, its edges, at the believed pose.
-    perception::RangeImage image = vj.locus->image;
-    image.T_WS = believed_WS;
+    const PairRegistration pair_reg(*vi.locus, vi.T_WS, *vj.locus, vj.T_WS, config, spec.methods);
+    const Eigen::Isometry3d& T_IJ = pair_reg.trueRelative();  // the truth, for scoring only
+    const Eigen::Isometry3d T_0 = spec.initialEstimate(T_IJ);  // what the rover believes
+    const Eigen::Isometry3d believed_WS = vi.T_WS * T_0;       // sensor J in the believed world
     const perception::ElevationMap& map_i = vi.locus->map;
     const perception::MapGrid grid_j = perception::believedGrid(map_i.grid(), vi.T_WS, believed_WS);
     std::vector<Registered> registered;
-    // The mapper map I was made with, for the weighted method's covariance (the pixels of image I
-    // that map I's lines share).
-    std::optional<perception::LocusMapper> source_i;
-    if (std::find(spec.methods.begin(), spec.methods.end(), MatchMethod::IconicWeighted) != spec.methods.end())
-      source_i.emplace(vi.locus->image, vi.locus->edges ? &*vi.locus->edges : nullptr, config.locus);
     for (const MatchMethod method : spec.methods) {
-      Stopwatch t;
-      const perception::RegistrationResult reg = perception::registerViews(
-          map_i, image, vj.locus->edges ? &*vj.locus->edges : nullptr, grid_j, method, config,
-          source_i ? &*source_i : nullptr);
+      const PairResult result = pair_reg.run(method, T_0);
+      const perception::RegistrationResult& reg = result.reg;
       const perception::IconicResult& res = reg.iconic;
-      const double seconds = t.seconds();
+      const double seconds = result.seconds;
       s.addTime("match", seconds);
-      const Eigen::Isometry3d T_est = vi.T_WS.inverse() * perception::poseFromVector(reg.nu).inverse() * believed_WS;
-      const perception::PoseError err = perception::poseError(T_IJ, T_est), start = perception::poseError(T_IJ, T_0);
+      const Eigen::Isometry3d& T_est = result.T_est;
+      const perception::PoseError err = result.error, start = result.start;
       const bool success = err.translation_m <= spec.success_translation_m && err.rotation_deg <= spec.success_rotation_deg;
       const std::string name = matchMethodName(method);
       nlohmann::ordered_json pair;

@@ -26,7 +26,11 @@ printf 'name: x\nterrain: {kind: plane}\nsensor: {noise_k: -1}\nviews: [{xyz_m: 
 expect_error out_of_range 'range\.yaml: sensor\.noise_k' run "$tmp/range.yaml" --out "$tmp/run4"
 printf 'name: x\nterrain: {kind: plane}\nviews: [{xyz_m: [0,0,.nan]}]\n' >"$tmp/nan.yaml"
 expect_error nan_value 'nan\.yaml: views\[0\]\.xyz_m' run "$tmp/nan.yaml" --out "$tmp/run5"
-for k in 1 2 3 4 5; do
+printf 'name: x\nterrain: {kind: plane}\nviews: [{xyz_m: [0,0,1]}, {xyz_m: [0.5,0,1]}]\nmap: {}\n' >"$tmp/nomatch.yaml"
+expect_error basin_without_matching 'nomatch\.yaml: matching' basin "$tmp/nomatch.yaml" --out "$tmp/run6"
+expect_error basin_negative_axis '--translation-m: -1 is negative' basin "$tmp/nomatch.yaml" --out "$tmp/run7" --translation-m 0,-1
+expect_error basin_empty_axis '--rotation-deg: expected comma-separated numbers' basin "$tmp/nomatch.yaml" --out "$tmp/run8" --rotation-deg ''
+for k in 1 2 3 4 5 6 7 8; do
   if [[ -e $tmp/run$k ]]; then echo "FAIL: $tmp/run$k was created for a bad scenario"; fail=1; fi
 done
 if ((fail)); then echo "1 failed"; exit 1; fi
