@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "eval/peers/open3d_peers.hpp"
 #include "eval/run_state.hpp"
 
 namespace ambler::eval {
@@ -15,13 +16,43 @@ PairRegistration::PairRegistration(const perception::ScanMap& view_i, const Eige
   // The mapper map I was made with: the pixels of image I that map I's lines share.
   if (std::find(methods.begin(), methods.end(), MatchMethod::IconicWeighted) != methods.end())
     source_i_.emplace(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus);
+  if (std::any_of(methods.begin(), methods.end(), [](MatchMethod m) { return !paperMethod(m); }))
+    returns_i_ = peers::returns(i_.image);
 }
+
+namespace {
+
+peers::PeerMethod peerMethod(MatchMethod m) {
+  switch (m) {
+    case MatchMethod::Gicp: return peers::PeerMethod::Gicp;
+    case MatchMethod::Fgr: return peers::PeerMethod::Fgr;
+    default: return peers::PeerMethod::IcpPointToPlane;
+  }
+}
+
+}  // namespace
 
 PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_0) const {
   PairResult out;
   out.believed_WS = T_WS_i_ * T_0;
   const auto paper = paperMethod(method);
-  if (!paper) throw std::invalid_argument(std::string(matchMethodName(method)) + ": a registration peer, not built yet");
+  out.start = perception::poseError(T_IJ_, T_0);
+  if (!paper) {
+    // A peer: scan J's returns in its believed world onto scan I's in the world. Its T maps the
+    // believed world to the world, so sensor J is at T·believed, and ν (world → believed) is T⁻¹.
+    perception::RangeImage image = j_.image;
+    image.T_WS = out.believed_WS;
+    const std::vector<Eigen::Vector3d> returns_j = peers::returns(image);
+    Stopwatch t;
+    const peers::PeerResult r = peers::registerPeer(returns_i_, T_WS_i_.translation(), returns_j,
+                                                    out.believed_WS.translation(), peerMethod(method));
+    out.seconds = t.seconds();
+    out.reg.nu = perception::vectorFromPose(r.T.inverse());
+    out.reg.iterations = r.iterations;
+    out.T_est = T_WS_i_.inverse() * r.T * out.believed_WS;
+    out.error = perception::poseError(T_IJ_, out.T_est);
+    return out;
+  }
   // Image J as the rover has it: unwrapped, its edges, at the believed pose.
   perception::RangeImage image = j_.image;
   image.T_WS = out.believed_WS;
@@ -32,7 +63,6 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
   out.seconds = t.seconds();
   out.T_est = T_WS_i_.inverse() * perception::poseFromVector(out.reg.nu).inverse() * out.believed_WS;
   out.error = perception::poseError(T_IJ_, out.T_est);
-  out.start = perception::poseError(T_IJ_, T_0);
   return out;
 }
 

@@ -52,6 +52,7 @@ class PairRegistration {
   Eigen::Isometry3d T_WS_i_, T_IJ_;
   perception::RegistrationConfig config_;
   std::optional<perception::LocusMapper> source_i_;  // for iconic_weighted's covariance
+  std::vector<Eigen::Vector3d> returns_i_;           // the peers' target: scan I's returns in the world
 };
 
 }  // namespace ambler::eval

@@ -281,7 +281,9 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
       else if (name == "features+iconic") m.methods.push_back(MatchMethod::FeaturesIconic);
       else if (name == "iconic_lm") m.methods.push_back(MatchMethod::IconicLm);
       else if (name == "iconic_weighted") m.methods.push_back(MatchMethod::IconicWeighted);
-      else reader.fail(path, std::string(name) + " is a registration peer, not built yet (built: features, iconic, features+iconic, iconic_lm, iconic_weighted)");
+      else if (name == "icp_point_to_plane") m.methods.push_back(MatchMethod::IcpPointToPlane);
+      else if (name == "gicp") m.methods.push_back(MatchMethod::Gicp);
+      else m.methods.push_back(MatchMethod::Fgr);
     }
   }
   if (const auto e = f.get("initial_error")) {

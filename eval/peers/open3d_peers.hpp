@@ -33,7 +33,13 @@ const char* peerMethodName(PeerMethod method);
 // ranges 3–15 m, map cells 10 cm, the demo's maps ~10 × 11 m. The voxel is the map cell (0.10 m):
 // it leaves ~7 000 of a scan's 16 384 returns (the near field thinned, the far field, rows
 // 0.3–0.6 m apart, untouched). Open3D's FGR guidance keeps voxel : normal radius : FPFH radius
-// near 1 : 2 : 5, hence 0.20 m and 0.50 m. Measured on the test's noise-free ray-cast scans of
+// near 1 : 2 : 5 (0.20 and 0.50 m), for clouds sampled about evenly. A scanner's are not: on the
+// ground its rows are 0.3–0.6 m apart in the far field, so a 0.20 m ball holds one row, its points
+// nearly collinear, and the normal is ill-posed. On the pipeline's noise-free Mars-like pair
+// (tests/integration/test_matching.cpp, 0.3 m and 3° off) a 0.20 m radius left every peer 1.0 cm
+// and 0.07° off, a 0.40 m radius 1.5–1.8 mm and 0.012–0.018° (and ICP then came home from 2 m and
+// 30° too); so 0.40 m for normals, and the FPFH radius at 2.5 × that, 1.00 m, keeping the guide's
+// normal : FPFH ratio. Measured on the test's noise-free ray-cast scans of
 // the demo's two views (tests/peers; view J 0.36 m and 3.2° off, as the demo's initial error):
 //   - the correspondence gate decides the accuracy. Pairs up to the gate include wrong ones across
 //     the edges of the overlap and of rock shadows, and they bias the fit: point-to-plane ICP
@@ -44,7 +50,7 @@ const char* peerMethodName(PeerMethod method);
 //     scans (σ_ρ = kρ², 3–7 cm at 10–15 m, plus 7.6 cm range quantization) a wider gate keeps
 //     more true pairs at the price of that bias; widen it there and say so.
 //   - voxel 0.05 m (gate 0.15) doubled the points for the same 2.4 mm; voxel 0.20 m (gate 0.60)
-//     left ICP 5.7 cm off. Normal radius 0.3 or 0.5 m instead of 0.2 changed ICP's error < 1 mm.
+//     left ICP 5.7 cm off. (On those dense synthetic scans the normal radius mattered < 1 mm.)
 //   - convergence thresholds 1e-9 (Open3D's 1e-6 gave the same T to < 0.1 mm here, a few
 //     iterations sooner); they cost little and make "converged" mean a still transform.
 //   - FGR with use_absolute_scale = true (metres): its own answer was 6 mm / 0.02° off from the
@@ -52,9 +58,9 @@ const char* peerMethodName(PeerMethod method);
 //     the point-to-plane refinement then lands where ICP lands.
 struct PeerConfig {
   double voxel_m = 0.10;               // voxel-grid downsampling of both clouds
-  double normal_radius_m = 0.20;       // hybrid KD search radius for normals (2 × voxel)
+  double normal_radius_m = 0.40;       // hybrid KD search radius for normals (4 × voxel: two scan rows)
   int normal_max_nn = 30;              // ... and its neighbour cap
-  double fpfh_radius_m = 0.50;         // hybrid KD search radius for FPFH (5 × voxel)
+  double fpfh_radius_m = 1.00;         // hybrid KD search radius for FPFH (2.5 × the normal radius)
   int fpfh_max_nn = 100;               // ... and its neighbour cap
   double max_correspondence_m = 0.15;  // ICP / GICP / FGR-refinement pair gate (1.5 × voxel)
   int max_iterations = 60;             // ICP / GICP / FGR-refinement iteration cap

@@ -693,7 +693,9 @@ TEST(ScenarioMatching, RefusesBadInput) {
   expectError(kThreeViews + "matching: {pairs: [[1, 1]]}\n", "matching.pairs[0]", "against itself");
   expectError(kThreeViews + "matching: {pairs: [[0, 1.5]]}\n", "matching.pairs[0]", "view indices");
   expectError(kThreeViews + "matching: {methods: [iconik]}\n", "matching.methods[0]", "did you mean iconic");
-  expectError(kThreeViews + "matching: {methods: [features, icp_point_to_plane]}\n", "matching.methods[1]", "not built yet");
+  // An unknown peer.
+  expectError(kThreeViews + "matching: {methods: [features, icp_point_to_point]}\n", "matching.methods[1]",
+              "did you mean icp_point_to_plane");
   expectError(kThreeViews + "matching: {initial_error: {xyz_m: [5, 0, 0]}}\n", "matching.initial_error.xyz_m[0]",
               "in [-3, 3]");
   expectError(kThreeViews + "matching: {initial_error: {rpy_deg: [0, 0, 40]}}\n", "matching.initial_error.rpy_deg[2]",
