@@ -10,6 +10,7 @@ packages=(
   libeigen3-dev libopencv-dev       # maths, images
   libyaml-cpp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev
+  libopen3d-dev                     # the registration peers (eval/peers/ only)
   git jq                            # scripts/same-outputs.sh: revisions to compare, metrics.json
 )
 missing=()
