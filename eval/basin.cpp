@@ -118,7 +118,7 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
     h.title = sc.name + ": " + name;
     h.subtitle = criterion + "; median error";
     h.row_axis = "initial translation";
-    h.col_axis = "initial rotation (about a random axis)";
+    h.col_axis = g.vertical_axis ? "initial rotation (yaw)" : "initial rotation (about a random axis)";
     for (const double v : g.translation_m) h.row_labels.push_back(numberText(v) + " m");
     for (const double v : g.rotation_deg) h.col_labels.push_back(numberText(v) + " deg");
     BasinBoundary b{name, {}};
@@ -170,13 +170,15 @@ std::vector<double> parseBasinAxis(const std::string& text, const std::string& o
 }
 
 Eigen::Isometry3d basinError(std::uint64_t seed, int trial, double translation_m, double rotation_deg,
-                             const Eigen::Isometry3d& T_WS_j) {
+                             const Eigen::Isometry3d& T_WS_j, bool vertical_axis) {
   base::Rng rng(base::streamKey(seed, kBasinStream, std::uint64_t(trial)));
   const double heading = rng.uniform(0, 2 * std::numbers::pi);
   // A uniform axis on the sphere: z uniform in [−1, 1], its azimuth uniform.
   const double z = rng.uniform(-1, 1), azimuth = rng.uniform(0, 2 * std::numbers::pi);
   const double s = std::sqrt(std::max(0.0, 1 - z * z));
-  const Eigen::Vector3d axis(s * std::cos(azimuth), s * std::sin(azimuth), z);
+  // In sensor J's frame: the world's vertical there is R_WS_jᵀ·z.
+  const Eigen::Vector3d axis = vertical_axis ? Eigen::Vector3d(T_WS_j.linear().transpose() * Eigen::Vector3d::UnitZ())
+                                             : Eigen::Vector3d(s * std::cos(azimuth), s * std::sin(azimuth), z);
   const Eigen::Vector3d h_world(std::cos(heading), std::sin(heading), 0);
   Eigen::Isometry3d E = Eigen::Isometry3d::Identity();
   E.linear() = Eigen::AngleAxisd(rotation_deg * std::numbers::pi / 180.0, axis).toRotationMatrix();
@@ -228,7 +230,7 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
     for (std::size_t i; (i = next++) < todo.size();) {
       const Draw d = draw(g, todo[i]);
       const double t_m = g.translation_m[d.t], r_deg = g.rotation_deg[d.r];
-      const Eigen::Isometry3d T_0 = pair.trueRelative() * basinError(sc.seed, d.trial, t_m, r_deg, vj.T_WS);
+      const Eigen::Isometry3d T_0 = pair.trueRelative() * basinError(sc.seed, d.trial, t_m, r_deg, vj.T_WS, g.vertical_axis);
       std::string verdicts;
       for (const MatchMethod m : spec.methods) {
         std::vector<std::string> row{matchMethodName(m), numberText(t_m), numberText(r_deg), std::to_string(d.trial)};

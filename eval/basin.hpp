@@ -27,6 +27,7 @@ struct BasinGrid {
   std::vector<double> translation_m{0, 0.5, 1, 1.5, 2, 2.5, 3};
   std::vector<double> rotation_deg{0, 5, 10, 15, 20, 25, 30};
   int trials = 10;
+  bool vertical_axis = false;  // rotations about the world's vertical (yaw) instead of a random axis
 };
 
 // "0,0.5,1": finite values ≥ 0, strictly increasing, at most `max`. Throws BasinError naming
@@ -45,10 +46,11 @@ struct BasinOptions {
 
 // The initial error of trial `trial` at magnitudes (t, r): E = (R, t·h) in sensor J's frame, h
 // the unit horizontal (world) direction and R the rotation by r about the unit axis that the
-// trial draws from the scenario's seed. The directions depend on the seed and the trial alone,
+// trial draws from the scenario's seed (uniform on the sphere; with `vertical_axis`, the world's
+// vertical, a yaw error as the paper's). The directions depend on the seed and the trial alone,
 // so every cell (and every method) sees the same directions: the cells differ in magnitude only.
 Eigen::Isometry3d basinError(std::uint64_t seed, int trial, double translation_m, double rotation_deg,
-                             const Eigen::Isometry3d& T_WS_j);
+                             const Eigen::Isometry3d& T_WS_j, bool vertical_axis = false);
 
 // Runs the basin (or its shard): the scenario's world, the pair's scans and view I's map once
 // (into out/pair/, as `ambler run` writes them), then every draw. Writes out/basin.csv and the

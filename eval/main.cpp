@@ -58,6 +58,9 @@ int main(int argc, char** argv) {
   auto* basin_r_opt = basin->add_option("--rotation-deg", basin_r, "Initial rotation magnitudes, degrees, comma-separated "
                                                "(default 0,5,10,15,20,25,30)");
   basin->add_option("--trials", basin_opt.grid.trials, "Seeded trials per cell")->capture_default_str();
+  std::string basin_axis = "random";
+  basin->add_option("--rotation-axis", basin_axis, "random (uniform on the sphere) or vertical (yaw errors only)")
+      ->capture_default_str();
   auto* basin_shard_opt = basin->add_option("--shard", basin_shard,
                                             "Run only shard K of N (1-based): the draws u with u mod N = K-1, into "
                                             "DIR/basin.shard-K-of-N.csv");
@@ -161,6 +164,9 @@ int main(int argc, char** argv) {
       if (basin_t_opt->count()) basin_opt.grid.translation_m = parseBasinAxis(basin_t, "--translation-m", 100.0);
       if (basin_r_opt->count()) basin_opt.grid.rotation_deg = parseBasinAxis(basin_r, "--rotation-deg", 180.0);
       if (basin_shard_opt->count()) basin_opt.shard = parseShard(basin_shard);
+      if (basin_axis != "random" && basin_axis != "vertical")
+        throw BasinError("--rotation-axis: expected random or vertical, got " + yamlQuoted(basin_axis));
+      basin_opt.grid.vertical_axis = basin_axis == "vertical";
       if (basin_merge && (basin_opt.shard || basin_opt.timing))
         throw BasinError(std::string("--merge: merges the shards' files; ") +
                          (basin_opt.shard ? "--shard" : "--timing") + " does not apply");

@@ -71,6 +71,12 @@ TEST(Basin, DrawsHaveTheAskedMagnitudesHorizontalTranslationAndAUnitAxis) {
     const Eigen::AngleAxisd a(E.linear()), b(half.linear());
     EXPECT_NEAR(a.axis().dot(b.axis()), 1.0, 1e-9);
   }
+  // About the vertical: the believed sensor keeps its gravity direction (a yaw error alone).
+  const Eigen::Isometry3d yaw = basinError(11, 3, 1.0, 20.0, T_WS_j, true);
+  const Eigen::Vector3d up_true = T_WS_j.linear().transpose() * Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d up_believed = (T_WS_j * yaw).linear().transpose() * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR((up_true - up_believed).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(perception::poseError(Eigen::Isometry3d::Identity(), yaw).rotation_deg, 20.0, 1e-9);
   // Different trials draw different directions.
   const Eigen::Vector3d t0 = basinError(11, 0, 1, 0, T_WS_j).translation();
   const Eigen::Vector3d t1 = basinError(11, 1, 1, 0, T_WS_j).translation();
