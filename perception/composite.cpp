@@ -14,22 +14,40 @@ bool sameGrid(const MapGrid& a, const MapGrid& b) {
 
 }  // namespace
 
-void mergeInto(ElevationMap& composite, const ElevationMap& map) {
+namespace {
+
+// mergeInto's cell rule; `shared` null: nothing shared.
+void mergeCells(ElevationMap& composite, Raster<float>* composite_shared, const ElevationMap& map,
+                const Raster<float>* map_shared) {
   if (!sameGrid(composite.grid(), map.grid())) throw std::invalid_argument("mergeInto: the maps' grids differ");
   const MapGrid& g = map.grid();
+  if (composite_shared && (composite_shared->rows() != g.rows || composite_shared->cols() != g.cols ||
+                           map_shared->rows() != g.rows || map_shared->cols() != g.cols))
+    throw std::invalid_argument("mergeInto: the shared σ rasters are not the maps' size");
+  const auto sharedAt = [](const Raster<float>* s, int r, int c) {
+    const double v = s ? (*s)(r, c) : 0.0;
+    return std::isnan(v) ? 0.0 : v;
+  };
   for (int r = 0; r < g.rows; ++r)
     for (int c = 0; c < g.cols; ++c) {
       const CellState a = composite.stateAt(r, c), b = map.stateAt(r, c);
       if (b == CellState::Known) {
         const double z2 = map.elevation()(r, c), s2 = map.sigma()(r, c);
+        const double sh2 = std::min(sharedAt(map_shared, r, c), s2);
         if (a != CellState::Known) {
           composite.setKnown(r, c, float(z2), float(s2));
+          if (composite_shared) (*composite_shared)(r, c) = float(sh2);
           continue;
         }
         const double z1 = composite.elevation()(r, c), s1 = composite.sigma()(r, c);
+        const double sh1 = std::min(sharedAt(composite_shared, r, c), s1);
         const double v1 = s1 * s1, v2 = s2 * s2;
         if (v1 + v2 > 0) {
-          composite.setKnown(r, c, float((v2 * z1 + v1 * z2) / (v1 + v2)), float(std::sqrt(v1 * v2 / (v1 + v2))));
+          const double w1 = v2 / (v1 + v2), w2 = v1 / (v1 + v2);
+          const double shared = w1 * sh1 + w2 * sh2;
+          const double own = w1 * w1 * (v1 - sh1 * sh1) + w2 * w2 * (v2 - sh2 * sh2);
+          composite.setKnown(r, c, float(w1 * z1 + w2 * z2), float(std::sqrt(own + shared * shared)));
+          if (composite_shared) (*composite_shared)(r, c) = float(shared);
         } else {
           composite.setKnown(r, c, float(0.5 * (z1 + z2)), 0.f);
         }
@@ -43,6 +61,15 @@ void mergeInto(ElevationMap& composite, const ElevationMap& map) {
         }
       }
     }
+}
+
+}  // namespace
+
+void mergeInto(ElevationMap& composite, const ElevationMap& map) { mergeCells(composite, nullptr, map, nullptr); }
+
+void mergeInto(ElevationMap& composite, Raster<float>& composite_shared, const ElevationMap& map,
+               const Raster<float>& map_shared) {
+  mergeCells(composite, &composite_shared, map, &map_shared);
 }
 
 Raster<float> registrationSigma(const ElevationMap& map, const PoseVector& nu, const Matrix6d& P) {

@@ -21,6 +21,15 @@ namespace ambler::perception {
 // Throws std::invalid_argument if the grids differ.
 void mergeInto(ElevationMap& composite, const ElevationMap& map);
 
+// The same where part of each map's σ is shared by every view of a cell (an error they all make:
+// docs/composite.md): `shared` gives that part's σ per cell (≤ σ; NaN: none), for the composite
+// (updated) and for the map. z is eq. 9's as above; the σ is that of the same weighted mean
+// w₁z₁ + w₂z₂ with the shared parts fully correlated and the rest independent:
+//   σ_s = w₁σ_s1 + w₂σ_s2,   σ² = w₁²(σ₁² − σ_s1²) + w₂²(σ₂² − σ_s2²) + σ_s²,
+// which is eq. 9's σ when nothing is shared. Throws std::invalid_argument if the sizes differ.
+void mergeInto(ElevationMap& composite, Raster<float>& composite_shared, const ElevationMap& map,
+               const Raster<float>& map_shared);
+
 // The σ that an uncertain pose adds to each Known cell of `map` (NaN elsewhere). The map was
 // built from a view whose sensor pose the rover corrected by ν (S = exp(ν)⁻¹·B, registerViews'
 // convention, B the believed pose) and ν has covariance P (rx, ry, rz, tx, ty, tz). A point the

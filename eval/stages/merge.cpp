@@ -3,6 +3,7 @@
 // listed matching method's estimates — and merged by eq. 9 (perception::mergeInto). With matched
 // poses each link's covariance is propagated into the cells' σ (perception::registrationSigma), so
 // a composite built on a poor match says so. Scored against ground truth: maps/composite_*.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -59,13 +60,24 @@ void run(RunState& s) {
     for (std::size_t k = 0; k < s.views.size(); ++k) placements[k] = {true, s.views[k].T_WS, {}};
   }
   const perception::LocusConfig locus = locusConfig(sc);
+  // σ without the terrain's part (docs/locus.md, σ_rough): what is left is the part every view
+  // of a cell shares (docs/composite.md).
+  perception::LocusConfig noise_only = locus;
+  noise_only.roughness = false;
   perception::ElevationMap composite(grid);
+  perception::Raster<float> composite_shared = perception::Raster<float>::Zero(grid.rows, grid.cols);
   const perception::ElevationMap truth = s.truth->elevation(grid);
   perception::Raster<std::uint8_t> visible = perception::Raster<std::uint8_t>::Zero(grid.rows, grid.cols);
   for (std::size_t k = 0; k < s.views.size(); ++k) {
     const ViewState& v = s.views[k];
     // The scan as the map stage had it (unwrapped, its edges), at the composite's pose for it.
     perception::ElevationMap map = perception::mapAtPose(*v.locus, placements[k].T_WS, grid, locus);
+    const perception::ElevationMap noise = perception::mapAtPose(*v.locus, placements[k].T_WS, grid, noise_only);
+    perception::Raster<float> shared = perception::Raster<float>::Zero(grid.rows, grid.cols);
+    for (int r = 0; r < grid.rows; ++r)
+      for (int c = 0; c < grid.cols; ++c)
+        if (map.stateAt(r, c) == perception::CellState::Known && noise.stateAt(r, c) == perception::CellState::Known)
+          shared(r, c) = std::sqrt(std::max(0.f, map.sigma()(r, c) * map.sigma()(r, c) - noise.sigma()(r, c) * noise.sigma()(r, c)));
     // Each link's pose covariance, first order and independent: variances add.
     perception::Raster<float> extra = perception::Raster<float>::Zero(grid.rows, grid.cols);
     bool any = false;
@@ -76,7 +88,7 @@ void run(RunState& s) {
       any = true;
     }
     if (any) perception::addSigma(map, extra);
-    perception::mergeInto(composite, map);
+    perception::mergeInto(composite, composite_shared, map, shared);
     // What some view could see: visible if any view sees the true surface, else hidden if one
     // view's field of view holds it behind terrain.
     const auto& vis = *v.visibility;

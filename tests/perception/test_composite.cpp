@@ -52,6 +52,44 @@ TEST(Composite, AMapMergedWithItselfHalvesItsVariance) {
     }
 }
 
+// Part of each σ shared by both views (an error they both make): the weighted mean w₁z₁ + w₂z₂ of
+// eq. 9 has σ² = w₁²(σ₁² − s₁²) + w₂²(σ₂² − s₂²) + (w₁s₁ + w₂s₂)². A map wholly shared merged with
+// itself keeps its variance (the same error twice is no better than once); shared parts of 0 give
+// eq. 9's σ; and the composite's shared part carries on to the next merge.
+TEST(Composite, SharedPartsOfSigmaMergeAsCorrelatedErrors) {
+  const int n = planeMap(0, 0, 0, 0.01).grid().rows;  // the maps are n × n
+  ASSERT_EQ(planeMap(0, 0, 0, 0.01).grid().cols, n);
+  const Raster<float> none = Raster<float>::Zero(n, n);
+  {
+    ElevationMap composite = planeMap(0.3, 0, 0, 0.015);
+    Raster<float> shared = Raster<float>::Constant(n, n, 0.015f);
+    const ElevationMap same = composite;
+    mergeInto(composite, shared, same, shared);
+    EXPECT_NEAR(composite.sigma()(3, 4), 0.015, 1e-9);
+    EXPECT_NEAR(shared(3, 4), 0.015, 1e-9);
+  }
+  {
+    ElevationMap a = planeMap(0.2, -0.1, 0.5, 0.01, 0.01), b = a;
+    Raster<float> sa = none;
+    mergeInto(a, sa, planeMap(0.2, -0.1, 0.5, 0.02, -0.02), none);
+    mergeInto(b, planeMap(0.2, -0.1, 0.5, 0.02, -0.02));
+    EXPECT_NEAR(a.sigma()(5, 6), b.sigma()(5, 6), 1e-9);
+    EXPECT_EQ(a.elevation()(5, 6), b.elevation()(5, 6));
+  }
+  // σ₁ = 1 cm (0.6 shared), σ₂ = 2 cm (1.2 shared): w = (0.8, 0.2).
+  ElevationMap composite = planeMap(0.2, -0.1, 0.5, 0.01);
+  Raster<float> shared = Raster<float>::Constant(n, n, 0.006f);
+  mergeInto(composite, shared, planeMap(0.2, -0.1, 0.5, 0.02), Raster<float>::Constant(n, n, 0.012f));
+  const double w1 = 0.8, w2 = 0.2, s1 = 0.006, s2 = 0.012;
+  const double s = w1 * s1 + w2 * s2;
+  const double var = w1 * w1 * (1e-4 - s1 * s1) + w2 * w2 * (4e-4 - s2 * s2) + s * s;
+  EXPECT_NEAR(composite.sigma()(7, 8), std::sqrt(var), 1e-7);
+  EXPECT_NEAR(shared(7, 8), s, 1e-7);
+  EXPECT_GT(composite.sigma()(7, 8), 0.02 / std::sqrt(5.0));  // more than eq. 9's independent σ
+  EXPECT_THROW(mergeInto(composite, shared, planeMap(0, 0, 0, 0.01), Raster<float>::Zero(3, 3)),
+               std::invalid_argument);
+}
+
 TEST(Composite, StatesCombineAsStated) {
   // Cell k of a 3×3 grid pairs state k / 3 of the composite with state k % 3 of the map
   // (0 Unseen, 1 Known, 2 Shadow); Known cells z = 1 + row, σ 0.1; shadows have ceilings 2 and 3.
