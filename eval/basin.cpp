@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <numbers>
@@ -84,7 +85,62 @@ Scenario pairScenario(const Scenario& sc) {
 struct Tally {
   std::vector<std::vector<int>> ok, n;               // [method][cell]
   std::vector<std::vector<std::vector<double>>> err;  // [method][cell] translation errors
+  std::vector<std::vector<double>> ok_err;            // [method] translation errors of the successes
 };
+
+// For each rotation, the largest translation up to which every cell reaches `level` (NaN: not
+// even the first); what basin_boundary.png draws.
+std::vector<double> boundary(const BasinGrid& g, const std::vector<double>& rate, double level) {
+  std::vector<double> out;
+  for (std::size_t j = 0; j < g.rotation_deg.size(); ++j) {
+    double reached = std::numeric_limits<double>::quiet_NaN();
+    for (std::size_t i = 0; i < g.translation_m.size() && rate[i * g.rotation_deg.size() + j] >= level; ++i)
+      reached = g.translation_m[i];
+    out.push_back(reached);
+  }
+  return out;
+}
+
+// basin.md: the grid, the criterion, and per method its successes and its 95 % boundary.
+std::string summary(const Scenario& sc, const BasinOptions& opt, const Tally& t,
+                    const std::vector<BasinBoundary>& methods) {
+  const BasinGrid& g = opt.grid;
+  const MatchingSpec& spec = *sc.matching;
+  const auto [i, j] = spec.pairs.front();
+  std::string md = "<!-- written by `ambler basin` from basin.csv -->\n\n";
+  md += "Scenario `" + sc.name + "`, views " + std::to_string(i) + "-" + std::to_string(j) + "; " +
+        std::to_string(g.translation_m.size()) + " initial translations x " + std::to_string(g.rotation_deg.size()) +
+        " rotations (" + (g.vertical_axis ? "about the vertical" : "about a random axis") + ") x " +
+        std::to_string(g.trials) + " trials per cell, every method on the same draws. A trial succeeds within " +
+        numberText(100 * spec.success_translation_m) + " cm and " + numberText(spec.success_rotation_deg) +
+        "°.\n\n";
+  md += "The 95 % boundary: for each initial rotation, the largest initial translation up to which every "
+        "cell succeeds in at least 95 % of its trials (— where even the first cell does not).\n\n";
+  md += "| method | successes | median translation error of the successes |";
+  for (const double r : g.rotation_deg) md += " " + numberText(r) + "° |";
+  md += "\n|---|---:|---:|";
+  for (std::size_t k = 0; k < g.rotation_deg.size(); ++k) md += "---:|";
+  md += "\n";
+  for (std::size_t m = 0; m < methods.size(); ++m) {
+    int ok = 0, n = 0;
+    for (std::size_t c = 0; c < t.ok[m].size(); ++c) ok += t.ok[m][c], n += t.n[m][c];
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%d/%d (%.0f %%)", ok, n, n ? 100.0 * ok / n : 0.0);
+    md += "| " + methods[m].label + " | " + buf + " | ";
+    std::vector<double> e = t.ok_err[m];
+    std::sort(e.begin(), e.end());
+    if (e.empty()) {
+      md += "— |";
+    } else {
+      const double med = e.size() % 2 ? e[e.size() / 2] : 0.5 * (e[e.size() / 2 - 1] + e[e.size() / 2]);
+      std::snprintf(buf, sizeof buf, "%.1f mm |", 1000 * med);
+      md += buf;
+    }
+    for (const double b : boundary(g, methods[m].rate, 0.95)) md += std::isfinite(b) ? " " + numberText(b) + " m |" : " — |";
+    md += "\n";
+  }
+  return md;
+}
 
 void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector<std::vector<std::string>>& records) {
   const BasinGrid& g = opt.grid;
@@ -96,6 +152,7 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
   t.ok.assign(spec.methods.size(), std::vector<int>(cells, 0));
   t.n = t.ok;
   t.err.assign(spec.methods.size(), std::vector<std::vector<double>>(cells));
+  t.ok_err.assign(spec.methods.size(), {});
   std::map<std::string, std::size_t> t_index, r_index;
   for (std::size_t i = 0; i < g.translation_m.size(); ++i) t_index[numberText(g.translation_m[i])] = i;
   for (std::size_t i = 0; i < g.rotation_deg.size(); ++i) r_index[numberText(g.rotation_deg[i])] = i;
@@ -106,7 +163,10 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
     ++t.n[m][cell];
     if (row[6] == "true") ++t.ok[m][cell];
     double e = 0;
-    if (std::from_chars(row[4].data(), row[4].data() + row[4].size(), e).ec == std::errc()) t.err[m][cell].push_back(e);
+    if (std::from_chars(row[4].data(), row[4].data() + row[4].size(), e).ec == std::errc()) {
+      t.err[m][cell].push_back(e);
+      if (row[6] == "true") t.ok_err[m].push_back(e);
+    }
   }
   const std::string criterion = "success: within " + numberText(100 * spec.success_translation_m) + " cm and " +
                                 numberText(spec.success_rotation_deg) + " deg; " + std::to_string(g.trials) +
@@ -142,6 +202,7 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
     writePng(opt.out / ("basin_" + methodFileName(name) + ".png"), successHeatmap(h, width, height));
     boundaries.push_back(std::move(b));
   }
+  writeText(opt.out / "basin.md", summary(sc, opt, t, boundaries));
   writePng(opt.out / "basin_boundary.png",
            basinBoundaryPlot(g.translation_m, g.rotation_deg, boundaries, 0.95,
                              sc.name + ": 95% basin boundary, " + std::to_string(g.trials) + " trials per cell (lines 1% apart)"));

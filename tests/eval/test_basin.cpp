@@ -109,7 +109,7 @@ TEST(Basin, ZeroInitialErrorOnNoiseFreeTerrainSucceedsInEveryTrial) {
     EXPECT_EQ(row[6], "true") << row[0] << " trial " << row[3] << ": " << row[4] << " m, " << row[5] << " deg";
   }
   for (const char* png : {"basin_features.png", "basin_features_iconic.png", "basin_iconic.png",
-                          "basin_iconic_lm.png", "basin_iconic_weighted.png", "basin_boundary.png"})
+                          "basin_iconic_lm.png", "basin_iconic_weighted.png", "basin_boundary.png", "basin.md"})
     EXPECT_TRUE(fs::exists(tmp.path() / "out" / png)) << png;
 }
 
@@ -133,6 +133,7 @@ TEST(Basin, ThreeShardsMergeIntoTheUnshardedBytes) {
   EXPECT_EQ(slurp(merged), bytes);
   EXPECT_EQ(slurp(with_jobs), bytes);
   EXPECT_EQ(slurp(tmp.path() / "sharded" / "basin_boundary.png"), slurp(tmp.path() / "whole" / "basin_boundary.png"));
+  EXPECT_EQ(slurp(tmp.path() / "sharded" / "basin.md"), slurp(tmp.path() / "whole" / "basin.md"));
 
   // A shard missing, or a merge with another grid, is refused.
   fs::remove(tmp.path() / "sharded" / "basin.shard-2-of-3.csv");
