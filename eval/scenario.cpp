@@ -275,12 +275,13 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
     for (std::size_t i = 0; i < ms->size(); ++i) {
       const std::string path = "matching.methods[" + std::to_string(i) + "]";
       const std::string_view name = reader.choice((*ms)[i], path, {"iconic", "iconic_lm", "features", "features+iconic",
-                                                                   "iconic_weighted", "icp_point_to_plane", "gicp", "fgr"});
+                                                                   "iconic_weighted", "features+iconic_lm", "icp_point_to_plane", "gicp", "fgr"});
       if (name == "features") m.methods.push_back(MatchMethod::Features);
       else if (name == "iconic") m.methods.push_back(MatchMethod::Iconic);
       else if (name == "features+iconic") m.methods.push_back(MatchMethod::FeaturesIconic);
       else if (name == "iconic_lm") m.methods.push_back(MatchMethod::IconicLm);
       else if (name == "iconic_weighted") m.methods.push_back(MatchMethod::IconicWeighted);
+      else if (name == "features+iconic_lm") m.methods.push_back(MatchMethod::FeaturesLm);
       else if (name == "icp_point_to_plane") m.methods.push_back(MatchMethod::IcpPointToPlane);
       else if (name == "gicp") m.methods.push_back(MatchMethod::Gicp);
       else m.methods.push_back(MatchMethod::Fgr);
@@ -379,6 +380,7 @@ const char* matchMethodName(MatchMethod m) {
     case MatchMethod::FeaturesIconic: return "features+iconic";
     case MatchMethod::IconicLm: return "iconic_lm";
     case MatchMethod::IconicWeighted: return "iconic_weighted";
+    case MatchMethod::FeaturesLm: return "features+iconic_lm";
     case MatchMethod::IcpPointToPlane: return "icp_point_to_plane";
     case MatchMethod::Gicp: return "gicp";
     case MatchMethod::Fgr: return "fgr";
@@ -394,6 +396,7 @@ std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m) {
     case MatchMethod::FeaturesIconic: return R::FeaturesIconic;
     case MatchMethod::IconicLm: return R::IconicLm;
     case MatchMethod::IconicWeighted: return R::IconicWeighted;
+    case MatchMethod::FeaturesLm: return R::FeaturesLm;
     default: return std::nullopt;
   }
 }

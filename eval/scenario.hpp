@@ -58,6 +58,7 @@ enum class MatchMethod : std::uint8_t {
   FeaturesIconic,
   IconicLm,
   IconicWeighted,
+  FeaturesLm,       // features, then Levenberg–Marquardt from T_F
   IcpPointToPlane,  // peers: Open3D's point-to-plane ICP,
   Gicp,             // generalized ICP,
   Fgr,              // fast global registration on FPFH features, refined by point-to-plane ICP

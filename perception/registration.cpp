@@ -22,7 +22,8 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
   RegistrationResult out;
   const LocusMapper mapper(image_j, edges_j, config.locus);
   PoseVector nu0 = PoseVector::Zero();  // the rover trusts its belief
-  if (method == RegistrationMethod::Features || method == RegistrationMethod::FeaturesIconic) {
+  if (method == RegistrationMethod::Features || method == RegistrationMethod::FeaturesIconic ||
+      method == RegistrationMethod::FeaturesLm) {
     // Map J as the rover has it: in the believed world, on grid_j (in its own frame M_J).
     const LocusMapper mapper_j(image_j, edges_j, config.locus, grid_j.T_WM);
     out.map_j = mapper_j.map(grid_j);
@@ -50,6 +51,7 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
       out.iconic = iconicGradientDescent(map_i, mapper, nu0, config.iconic);
       break;
     case RegistrationMethod::IconicLm:
+    case RegistrationMethod::FeaturesLm:
       out.iconic = iconicLevenbergMarquardt(map_i, mapper, nu0, config.iconic);
       break;
     case RegistrationMethod::IconicWeighted: {

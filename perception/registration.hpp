@@ -19,6 +19,7 @@ enum class RegistrationMethod : std::uint8_t {
   FeaturesIconic,  // the paper's two stages: the descent from T_F
   IconicLm,        // Levenberg–Marquardt, robust, coarse to fine, from T_0
   IconicWeighted,  // the same with residuals weighted by 1/(σ₁² + σ₂²)
+  FeaturesLm,      // two stages with our second: Levenberg–Marquardt from T_F
 };
 
 struct RegistrationConfig {
