@@ -51,6 +51,13 @@ struct PairEstimate {
   std::optional<perception::Matrix6d> covariance;             // of ν, when the method gives one
 };
 
+// One footfall method's choice (footfall stage), for the leg after it.
+struct FootfallChoice {
+  std::string method;
+  double x_m, y_m;  // the chosen foot centre (NaN: no candidate)
+  double score, truth_score, truth_percentile;
+};
+
 struct RunState {
   const Scenario& scenario;
   std::filesystem::path out;
@@ -61,6 +68,8 @@ struct RunState {
   std::unique_ptr<sim::GroundTruth> truth;
   std::vector<ViewState> views;      // one per scenario view
   std::vector<PairEstimate> estimates;  // match stage: per pair and method, in run order
+  std::optional<perception::ElevationMap> composite;  // merge stage
+  std::vector<FootfallChoice> choices;  // footfall stage: per method, in the scenario's order
 
   nlohmann::ordered_json metrics;    // metrics.json; stages add their keys in stage order
   nlohmann::ordered_json timing;     // metrics.json's timing_s: seconds per stage

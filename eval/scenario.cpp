@@ -332,9 +332,65 @@ MergeSpec readMerge(const Reader& reader, const YAML::Node& node, const Scenario
   return m;
 }
 
+FootfallSpec readFootfall(const Reader& reader, const YAML::Node& node, const Scenario& s) {
+  const Fields f(reader, node, "footfall", {"map", "region", "foot_diameter_m", "methods"});
+  FootfallSpec ff;
+  const std::string fallback = s.merge ? "composite" : "view_0";
+  const std::string map = f.get("map") ? reader.string(*f.get("map"), "footfall.map") : fallback;
+  perception::MapGrid grid;
+  if (map == "composite") {
+    if (!s.merge) reader.fail("footfall.map", "composite needs a merge section");
+    ff.map_view = -1;
+    grid = s.merge->grid();
+  } else {
+    int k = -1;
+    if (map.rfind("view_", 0) == 0 && map.size() > 5 && map.size() < 9 &&
+        std::all_of(map.begin() + 5, map.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      k = std::stoi(map.substr(5));
+    if (k < 0 || k >= int(s.views.size()))
+      reader.fail("footfall.map", "expected composite or view_K with K in [0, " + std::to_string(s.views.size() - 1) +
+                                      "], got " + inQuotes(map));
+    ff.map_view = k;
+    grid = s.map->grid();
+  }
+  readRegion(reader, f, ff.x_m, ff.y_m);
+  ff.foot_diameter_m = f.number("foot_diameter_m", kPositive, ff.foot_diameter_m);
+  const double gx0 = grid.x_min, gx1 = grid.x_min + grid.cols * grid.cell;
+  const double gy1 = grid.y_max, gy0 = grid.y_max - grid.rows * grid.cell;
+  if (ff.x_m[0] < gx0 - 1e-9 || ff.x_m[1] > gx1 + 1e-9 || ff.y_m[0] < gy0 - 1e-9 || ff.y_m[1] > gy1 + 1e-9)
+    reader.fail("footfall.region", "x_m [" + shortest(ff.x_m[0]) + ", " + shortest(ff.x_m[1]) + "], y_m [" +
+                                       shortest(ff.y_m[0]) + ", " + shortest(ff.y_m[1]) + "] is not inside " + map +
+                                       "'s map (x [" + shortest(gx0) + ", " + shortest(gx1) + "], y [" +
+                                       shortest(gy0) + ", " + shortest(gy1) + "])");
+  if (ff.foot_diameter_m > std::min(ff.x_m[1] - ff.x_m[0], ff.y_m[1] - ff.y_m[0]))
+    reader.fail("footfall.foot_diameter_m", shortest(ff.foot_diameter_m) +
+                                                " m is larger than the region (the foot must fit in R, §5)");
+  if (const auto ms = f.get("methods")) {
+    if (!ms->IsSequence() || ms->size() == 0)
+      reader.fail("footfall.methods", "expected a non-empty list of methods, got " + shown(*ms));
+    ff.methods.clear();
+    for (std::size_t i = 0; i < ms->size(); ++i) {
+      const std::string path = "footfall.methods[" + std::to_string(i) + "]";
+      const std::string_view name = reader.choice((*ms)[i], path, {"max_min", "planar_fit", "support_area", "free_volume",
+                                                                   "equilibrium", "equilibrium_uncertain"});
+      ff.methods.push_back(perception::footfallMethodFromName(name));
+    }
+  }
+  return ff;
+}
+
+LegSpec readLeg(const Reader& reader, const YAML::Node& node) {
+  const Fields f(reader, node, "leg", {"soil", "load_n"});
+  LegSpec l;
+  l.soil = f.choice("soil", {"sand", "rock"}, "sand") == "sand" ? Soil::Sand : Soil::Rock;
+  l.load_n = f.number("load_n", kPositive, l.load_n);
+  return l;
+}
+
 Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::path& file) {
   const Fields f(reader, root, "",
-                 {"name", "description", "seed", "terrain", "sensor", "views", "map", "matching", "merge"});
+                 {"name", "description", "seed", "terrain", "sensor", "views", "map", "matching", "merge", "footfall",
+                  "leg"});
   Scenario s;
   s.file = file;
   s.name = reader.string(f.required("name"), "name");
@@ -362,11 +418,20 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
     if (!s.map) reader.fail("merge", "needs a map section: the composite is made of the views' maps");
     s.merge = readMerge(reader, *node, s);
   }
+  if (const auto node = f.get("footfall")) {
+    if (!s.map) reader.fail("footfall", "needs a map section: footfalls are chosen on a map");
+    s.footfall = readFootfall(reader, *node, s);
+  }
+  if (const auto node = f.get("leg")) {
+    if (!s.footfall) reader.fail("leg", "needs a footfall section: the leg steps on the chosen footfalls");
+    s.leg = readLeg(reader, *node);
+  }
   return s;
 }
 
 }  // namespace
 
+const char* soilName(Soil s) { return s == Soil::Sand ? "sand" : "rock"; }
 const char* mergePosesName(MergePoses p) { return p == MergePoses::Matched ? "matched" : "true"; }
 perception::MapGrid MergeSpec::grid() const {
   return perception::MapGrid::covering(x_m[0], x_m[1], y_m[0], y_m[1], cell_m);

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "perception/footfall.hpp"
 #include "perception/registration.hpp"
 #include "perception/map_grid.hpp"
 #include "perception/scan_to_map.hpp"
@@ -97,6 +98,25 @@ struct MergeSpec {
   perception::MapGrid grid() const;  // in view 0's world frame
 };
 
+// Footfall evaluation (docs/scenario.md, "footfall"; docs/footfall.md): the paper's five
+// methods and the uncertainty-aware one over a region of a map.
+struct FootfallSpec {
+  int map_view = -1;                // the map evaluated: -1 the composite, else view k's map
+  Eigen::Vector2d x_m{0.0, 2.0};    // R of §5, in the world frame
+  Eigen::Vector2d y_m{1.0, 3.0};
+  double foot_diameter_m = 0.30;
+  std::vector<perception::FootfallMethod> methods{perception::kFootfallMethods.begin(),
+                                                  perception::kFootfallMethods.end()};
+};
+
+// The simulated leg (docs/scenario.md, "leg"): steps on each method's choice.
+enum class Soil : std::uint8_t { Sand, Rock };
+const char* soilName(Soil s);
+struct LegSpec {
+  Soil soil = Soil::Sand;
+  double load_n = 4000;
+};
+
 struct Scenario {
   std::filesystem::path file;       // where it was loaded from (for messages and relative paths)
   std::string name;
@@ -108,6 +128,8 @@ struct Scenario {
   std::optional<MapSpec> map;       // absent: no maps
   std::optional<MatchingSpec> matching;  // absent: no registration
   std::optional<MergeSpec> merge;        // absent: no composite
+  std::optional<FootfallSpec> footfall;  // absent: no footfall evaluation
+  std::optional<LegSpec> leg;            // absent: no leg (needs footfall)
 };
 
 // What the matchers are told (docs/matching.md): the locus settings and sensor model of the map

@@ -181,6 +181,17 @@ std::string resolvedYaml(const Scenario& s) {
     y += "  region: {x_m: " + list({num(m.x_m[0]), num(m.x_m[1])}) + ", y_m: " + list({num(m.y_m[0]), num(m.y_m[1])}) +
          "}\n";
   }
+  if (s.footfall) {
+    const auto& f = *s.footfall;
+    y += "footfall:\n  map: " + (f.map_view < 0 ? std::string("composite") : "view_" + std::to_string(f.map_view)) + "\n";
+    y += "  region: {x_m: " + list({num(f.x_m[0]), num(f.x_m[1])}) + ", y_m: " + list({num(f.y_m[0]), num(f.y_m[1])}) +
+         "}\n";
+    y += "  foot_diameter_m: " + num(f.foot_diameter_m) + "\n  methods: [";
+    for (std::size_t i = 0; i < f.methods.size(); ++i)
+      y += std::string(i ? ", " : "") + std::string(perception::footfallMethodName(f.methods[i]));
+    y += "]\n";
+  }
+  if (s.leg) y += std::string("leg:\n  soil: ") + soilName(s.leg->soil) + "\n  load_n: " + num(s.leg->load_n) + "\n";
   return y;
 }
 

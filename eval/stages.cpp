@@ -23,6 +23,7 @@ const std::vector<Stage>& runStages() {
       stages::cartesian(),
       stages::match(),
       stages::merge(),
+      stages::footfall(),
   };
   return all;
 }

@@ -25,6 +25,7 @@ Stage map();        // the locus map of each scan, scored; maps/
 Stage cartesian();  // the Cartesian baseline of each scan, scored; maps/
 Stage match();      // each pair of views registered by each method, scored; matching/
 Stage merge();      // the composite map of every view, scored; maps/composite_*
+Stage footfall();   // each method's footfall on a map, scored on the true surface; footfall/
 }  // namespace stages
 
 }  // namespace ambler::eval

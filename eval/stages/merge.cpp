@@ -109,6 +109,7 @@ void run(RunState& s) {
   std::snprintf(line, sizeof line, "merge     composite of %d views (%s poses): coverage %.1f%%, RMS error %.4f m, within 1σ %.0f%%",
                 int(s.views.size()), mergePosesName(spec.poses), 100 * m.coverage, m.rms_error_m, 100 * m.within_1sigma);
   s.say(line);
+  s.composite = std::move(composite);
 }
 
 }  // namespace

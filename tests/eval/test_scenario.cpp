@@ -739,3 +739,47 @@ TEST(ScenarioMerge, RefusesBadInput) {
 
 }  // namespace
 }  // namespace ambler::eval
+
+namespace ambler::eval {
+namespace {
+
+// footfall: {} evaluates every method on view 0's map over the contract's default region; a
+// composite is the default when there is one; every key reads back.
+TEST(ScenarioFootfall, DefaultsAndRoundTrip) {
+  const Scenario d = parseScenario(kThreeViews + "footfall: {}\n", kFile);
+  ASSERT_TRUE(d.footfall.has_value());
+  EXPECT_EQ(d.footfall->map_view, 0);
+  EXPECT_EQ(d.footfall->x_m, Eigen::Vector2d(0, 2));
+  EXPECT_EQ(d.footfall->y_m, Eigen::Vector2d(1, 3));
+  EXPECT_EQ(d.footfall->foot_diameter_m, 0.30);
+  EXPECT_EQ(d.footfall->methods.size(), 6u);
+  EXPECT_FALSE(d.leg.has_value());
+  expectRoundTrip(d);
+  const Scenario full = parseScenario(kThreeViews + "merge: {poses: true}\nfootfall: {region: {x_m: [-1, 0.5], y_m: [0, 2]}, "
+                                                   "foot_diameter_m: 0.4, methods: [equilibrium, max_min]}\n"
+                                                   "leg: {soil: rock, load_n: 2500}\n",
+                                      kFile);
+  EXPECT_EQ(full.footfall->map_view, -1);
+  EXPECT_EQ(full.footfall->methods,
+            (std::vector<perception::FootfallMethod>{perception::FootfallMethod::Equilibrium, perception::FootfallMethod::MaxMin}));
+  ASSERT_TRUE(full.leg.has_value());
+  EXPECT_EQ(full.leg->soil, Soil::Rock);
+  EXPECT_EQ(full.leg->load_n, 2500);
+  expectRoundTrip(full);
+}
+
+// Bad footfall and leg sections: one line naming the file and the key.
+TEST(ScenarioFootfall, RefusesBadInput) {
+  expectError(kThreeViews + "footfall: {region: {x_m: [4, 6], y_m: [0, 1]}}\n", "footfall.region", "is not inside view_0's map");
+  expectError(kThreeViews + "footfall: {region: {x_m: [0, 0.2], y_m: [0, 1]}}\n", "footfall.foot_diameter_m",
+              "larger than the region");
+  expectError(kThreeViews + "footfall: {methods: [max_min, max_mid]}\n", "footfall.methods[1]", "did you mean max_min");
+  expectError(kThreeViews + "footfall: {map: composite}\n", "footfall.map", "needs a merge section");
+  expectError(kThreeViews + "footfall: {map: view_7}\n", "footfall.map", "view_K with K in [0, 2]");
+  expectError(kThreeViews + "footfall: {}\nleg: {load_n: -4000}\n", "leg.load_n", "");
+  expectError(kThreeViews + "leg: {soil: sand}\n", "leg", "needs a footfall section");
+  expectError(kThreeViews + "footfall: {}\nleg: {soil: mud}\n", "leg.soil", "expected one of");
+}
+
+}  // namespace
+}  // namespace ambler::eval
