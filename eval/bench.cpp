@@ -20,6 +20,7 @@
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
 #include "perception/cartesian_mapper.hpp"
+#include "perception/footfall.hpp"
 #include "perception/iconic.hpp"
 #include "perception/scan_to_map.hpp"
 #include "perception/sensor_geometry.hpp"
@@ -327,6 +328,54 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
   j_out["repetitions"] = opt.repetitions;
   if (!opt.json.empty()) writeJson(opt.json, j_out);
   return j_out;
+}
+
+nlohmann::ordered_json benchFootfall(const BenchOptions& opt) {
+  nlohmann::ordered_json out, sizes = nlohmann::ordered_json::array();
+  std::printf("ambler bench footfall (10 000 candidates, 30 cm foot, all six methods; medians of %d)\n",
+              opt.repetitions);
+  std::printf("  %-8s %12s %14s %14s %9s\n", "cell m", "disk cells", "1 thread ms", "all cores ms", "speed-up");
+  for (const double cell : {0.10, 0.02}) {
+    // Fractal ground at the map's resolution, 100 candidate cells and the foot's margin a side.
+    terrains::TerrainSpec spec;
+    spec.kind = terrains::TerrainKind::Fractal;
+    const int n = 100 + 2 * int(std::ceil(0.15 / cell)) + 2;
+    spec.size_m = Eigen::Vector2d(cell * (n - 1), cell * (n - 1));
+    spec.cell_m = cell;
+    const terrains::Terrain t = terrains::makeTerrain(spec, 1);
+    const perception::MapGrid grid = perception::MapGrid::covering(-0.5 * cell * n, 0.5 * cell * n, -0.5 * cell * n,
+                                                                   0.5 * cell * n, cell);
+    perception::ElevationMap map(grid);
+    for (int r = 0; r < grid.rows; ++r)
+      for (int c = 0; c < grid.cols; ++c)
+        map.setKnown(r, c, float(t.ground.at(std::min(r, t.ground.rows() - 1), std::min(c, t.ground.cols() - 1))), 0.01f);
+    const int margin = (grid.rows - 100) / 2;
+    const perception::CellRegion region{margin, margin, 100, 100};
+    std::vector<perception::FootfallScores> res;
+    const auto once = [&] { res = perception::evaluateFootfalls(map, region); };
+    double one = 0;
+    {
+      tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+      one = timeMedian(opt.repetitions, once);
+    }
+    const double all = timeMedian(opt.repetitions, once);
+    long disk = 0;
+    const double rad = 0.15 / cell;
+    for (int dr = -int(rad) - 1; dr <= int(rad) + 1; ++dr)
+      for (int dc = -int(rad) - 1; dc <= int(rad) + 1; ++dc) disk += dr * dr + dc * dc <= rad * rad + 1e-9;
+    std::printf("  %-8.2f %12ld %14.2f %14.2f %8.2fx\n", cell, disk, one * 1e3, all * 1e3, one / all);
+    nlohmann::ordered_json e;
+    e["cell_m"] = cell;
+    e["candidates"] = 10000;
+    e["ms_1t"] = one * 1e3;
+    e["ms_all"] = all * 1e3;
+    sizes.push_back(e);
+  }
+  out["sizes"] = sizes;
+  out["threads"] = tbb::info::default_concurrency();
+  out["repetitions"] = opt.repetitions;
+  if (!opt.json.empty()) writeJson(opt.json, out);
+  return out;
 }
 
 }  // namespace ambler::eval

@@ -29,4 +29,9 @@ nlohmann::ordered_json benchMap(const BenchOptions& options);
 // matching section. Prints a table.
 nlohmann::ordered_json benchMatch(const Scenario& scenario, const BenchOptions& options);
 
+// The footfall benchmark (docs/benchmarks.md): every method of docs/footfall.md, dense over 100 × 100
+// candidate centres (10 000) of a fractal map (σ 1 cm everywhere), 30 cm foot, at 10 cm cells (a 10 m
+// square) and at 2 cm (a 2 m square); medians on one thread and on all cores. Prints a table.
+nlohmann::ordered_json benchFootfall(const BenchOptions& options);
+
 }  // namespace ambler::eval

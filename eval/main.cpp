@@ -99,6 +99,14 @@ int main(int argc, char** argv) {
   bench_match->add_option("--reps", bench_match_opt.repetitions, "Repetitions per measurement (median reported)")
       ->check(CLI::Range(1, 1000));
 
+  std::string bench_footfall_json;
+  BenchOptions bench_footfall_opt;
+  auto* bench_footfall = bench->add_subcommand("footfall", "Footfall evaluation, all methods dense over 10 000 "
+                                                           "candidates at 10 and 2 cm (1 thread and all cores).");
+  bench_footfall->add_option("--json", bench_footfall_json, "Also write the figures to this JSON file");
+  bench_footfall->add_option("--reps", bench_footfall_opt.repetitions, "Repetitions per measurement (median reported)")
+      ->check(CLI::Range(1, 1000));
+
   auto* experiment = app.add_subcommand("experiment", "Run one of the paper's experiments as sweeps; prints its "
                                                       "markdown tables (see docs/experiments/).");
   experiment->require_subcommand(1);
@@ -191,6 +199,9 @@ int main(int argc, char** argv) {
     } else if (*bench_map) {
       bench_map_opt.json = bench_map_json;
       benchMap(bench_map_opt);
+    } else if (*bench_footfall) {
+      bench_footfall_opt.json = bench_footfall_json;
+      benchFootfall(bench_footfall_opt);
     } else if (*bench_match) {
       bench_match_opt.json = bench_match_json;
       benchMatch(loadScenario(bench_match_scenario), bench_match_opt);
