@@ -30,7 +30,11 @@ printf 'name: x\nterrain: {kind: plane}\nviews: [{xyz_m: [0,0,1]}, {xyz_m: [0.5,
 expect_error basin_without_matching 'nomatch\.yaml: matching' basin "$tmp/nomatch.yaml" --out "$tmp/run6"
 expect_error basin_negative_axis '--translation-m: -1 is negative' basin "$tmp/nomatch.yaml" --out "$tmp/run7" --translation-m 0,-1
 expect_error basin_empty_axis '--rotation-deg: expected comma-separated numbers' basin "$tmp/nomatch.yaml" --out "$tmp/run8" --rotation-deg ''
-for k in 1 2 3 4 5 6 7 8; do
+printf 'name: x\nterrain: {kind: plane}\nviews: [{xyz_m: [0,0,1]}]\nmap: {}\nleg: {soil: sand}\n' >"$tmp/leg.yaml"
+expect_error leg_without_footfall 'leg\.yaml: leg: needs a footfall section' run "$tmp/leg.yaml" --out "$tmp/run9"
+printf 'name: x\nterrain: {kind: plane}\nviews: [{xyz_m: [0,0,1]}]\nmap: {}\nfootfall: {region: {x_m: [8, 9], y_m: [0, 1]}}\n' >"$tmp/ff.yaml"
+expect_error footfall_region_off_map 'ff\.yaml: footfall\.region: .*is not inside' run "$tmp/ff.yaml" --out "$tmp/run10"
+for k in 1 2 3 4 5 6 7 8 9 10; do
   if [[ -e $tmp/run$k ]]; then echo "FAIL: $tmp/run$k was created for a bad scenario"; fail=1; fi
 done
 if ((fail)); then echo "1 failed"; exit 1; fi
