@@ -492,7 +492,7 @@ TEST(ScenarioErrors, UnknownKeysEverywhere) {
   expectError(kMinimal + "map: {region: {x_m: [0, 1], z_m: [0, 1]}}\n", "map.region.z_m",
               "unknown key");
   expectError(kMinimal + "colour: red\n", "colour",
-              "unknown key (allowed: name, description, seed, terrain, sensor, views, map, matching, merge)");
+              "unknown key (allowed: name, description, seed, terrain, sensor, views, map, matching, merge, footfall, leg)");
   expectError(
       "name: t\nterrain: {kind: plane, rocks: {abundance: 0.1}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
       "terrain.rocks.abundance", "did you mean abundance_k?");
