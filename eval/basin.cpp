@@ -197,8 +197,8 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
       h.notes.push_back(note);
       b.rate.push_back(t.n[m][c] ? t.ok[m][c] / double(t.n[m][c]) : 0.0);
     }
-    const int width = std::max(620, 110 + 20 + 72 * int(g.rotation_deg.size()));
-    const int height = std::max(470, 124 + 44 * int(g.translation_m.size()));
+    const int width = std::max(620, 110 + 20 + 92 * int(g.rotation_deg.size()));
+    const int height = std::max(470, 146 + 58 * int(g.translation_m.size()));
     writePng(opt.out / ("basin_" + methodFileName(name) + ".png"), successHeatmap(h, width, height));
     boundaries.push_back(std::move(b));
   }

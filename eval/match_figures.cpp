@@ -377,7 +377,7 @@ cv::Mat successHeatmap(const SuccessGrid& g, int width, int height) {
   if (g.successes.size() != rows * cols || g.trials.size() != rows * cols ||
       (!g.notes.empty() && g.notes.size() != rows * cols))
     throw std::invalid_argument("successHeatmap: successes, trials and notes must have rows x cols entries");
-  const int left = 110, top = 62, bottom = 62, right = 20;
+  const int left = 110, top = 84, bottom = 62, right = 20;
   cv::Mat img(height, width, CV_8UC3, kPaper);
   centred(img, g.title, {width / 2, 20}, 0.7, kInk, 2);
   centred(img, g.subtitle, {width / 2, 46}, 0.45, kInk);
@@ -406,8 +406,8 @@ cv::Mat successHeatmap(const SuccessGrid& g, int width, int height) {
     centred(img, g.col_labels[j], {left + int(j) * cw + cw / 2, height - bottom + 16}, std::min(0.5, 0.9 * text), kInk);
   centred(img, g.col_axis, {left + int(cols) * cw / 2, height - 16}, 0.5, kInk);
   const auto space = g.row_axis.find(' ');
-  centred(img, g.row_axis.substr(0, space), {left / 2 + 8, top - 6}, 0.45, kInk);
-  if (space != std::string::npos) centred(img, g.row_axis.substr(space + 1), {left / 2 + 8, top + 10}, 0.45, kInk);
+  centred(img, g.row_axis.substr(0, space), {left / 2 + 8, top - 26}, 0.45, kInk);
+  if (space != std::string::npos) centred(img, g.row_axis.substr(space + 1), {left / 2 + 8, top - 10}, 0.45, kInk);
   return img;
 }
 
