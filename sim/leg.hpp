@@ -48,8 +48,8 @@ struct LegOutcome {
   double drift_m = 0;    // largest excursion of the sole centre during the hold after settling
   double load_n = 0;     // vertical contact force on the foot when settled
   double time_s = 0;     // simulated time at settling
-  int max_pair_contacts = 0;
-  int max_contacts = 0, max_rows = 0;  // most contacts seen between one foot geom and one terrain geom
+  int max_pair_contacts = 0;  // most contacts seen between one foot geom and one other geom
+  int max_contacts = 0, max_rows = 0;  // most contacts (d->ncon) and constraint rows (d->nefc)
   bool settled = false;
   // Contacts were dropped: a foot-geom/terrain-geom pair hit MuJoCo's 50 (mjMAXCONPAIR) or the
   // model's contact or constraint buffer filled (heightfields much finer than 2 cm).
@@ -67,7 +67,8 @@ std::string legXml(const std::string& world_file, const std::string& world_xml_t
 std::filesystem::path writeLegWorld(const std::filesystem::path& world_xml, const LegConfig& config);
 
 // Steps the leg on (x, y) of the world in `world_xml`: moves the foot above it, lowers it until
-// load_n is carried, waits until it settles. The world is read, never changed. Throws
+// load_n is carried, waits until it settles. The world's files are not changed (a temporary
+// leg_<pid>_<n>.xml is written beside them for MuJoCo's <include> and removed). Throws
 // std::invalid_argument for a bad config, std::runtime_error if MuJoCo cannot load the world or
 // no terrain lies under (x, y).
 LegOutcome stepLeg(const std::filesystem::path& world_xml, double x, double y,
