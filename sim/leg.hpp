@@ -1,0 +1,88 @@
+#pragma once
+// A single simulated Ambler leg that steps on a chosen footfall (§5 of the paper): a body on a
+// vertical prismatic joint, servoed horizontally, with a 30 cm disk foot on a passive two-axis
+// ankle. The leg lowers the foot until it carries the load, waits until it settles and reports
+// the foot's tilt, sinkage and slip. Sand sinks by the Bekker pressure–sinkage law (the
+// heightfield under the foot is lowered at run time), not by contact softness. See docs/leg.md.
+#include <Eigen/Core>
+#include <filesystem>
+#include <optional>
+#include <string>
+
+namespace ambler::sim {
+
+enum class Soil { Rock, Sand };
+
+struct LegConfig {
+  double foot_diameter_m = 0.30;
+  double foot_thickness_m = 0.05;
+  // The foot collides as convex prisms: the disk cut by a square grid of this pitch. MuJoCo
+  // 2.2.2 keeps at most 50 contacts per geom pair, the first in the heightfield's row order, so a
+  // single cylinder on a 2 cm grid would be held only along its -y rim.
+  double foot_tile_m = 0.06;
+  double load_n = 4000;  // vertical load on the ground at rest, the leg's own weight included
+  Soil soil = Soil::Rock;
+  // Bekker p = (k_c/b + k_phi)·z^n, p in Pa, z in m; b = the foot's radius (Wong's convention
+  // for a circular plate). Dry sand, Wong, Theory of Ground Vehicles (table of Bekker terrain
+  // values, dry sand after the Land Locomotion Laboratory).
+  double bekker_n = 1.1, bekker_kc = 0.99e3, bekker_kphi = 1528.43e3;
+  double leg_mass_kg = 20.0, foot_mass_kg = 5.0;
+  double friction = 1.0;                      // sliding friction of the foot on any surface
+  double lateral_stiffness_n_per_m = 2e5;     // the leg's horizontal position servo
+  double descent_speed_m_s = 0.2;
+  double clearance_m = 0.03;                  // start: sole this far above the highest point
+  double load_ramp_s = 0.2;                   // load rises linearly from first contact
+  double settle_speed_m_s = 2e-3;             // settled: foot speeds below these ...
+  double settle_angular_speed_rad_s = 0.02;
+  double settle_window_s = 0.05;              // ... for this long, after the ramp
+  double hold_s = 0.2;                        // after settling, watch the foot this long
+  double time_limit_s = 3.0;                  // settled = false if not settled by then
+  double timestep_s = 1e-3;
+};
+
+struct LegOutcome {
+  double x_m = 0, y_m = 0, z_m = 0;  // sole centre once settled (or at the time limit)
+  double tilt_deg = 0;                // foot axis from vertical
+  double sink_m = 0;     // deepest point of the true terrain above the sole plane, in the footprint
+  double slip_m = 0;     // horizontal travel of the sole centre from first contact to settled
+  double drift_m = 0;    // largest excursion of the sole centre during the hold after settling
+  double load_n = 0;     // vertical contact force on the foot when settled
+  double time_s = 0;     // simulated time at settling
+  int max_pair_contacts = 0;  // most contacts seen between one foot geom and one other geom
+  int max_contacts = 0, max_rows = 0;  // most contacts (d->ncon) and constraint rows (d->nefc)
+  bool settled = false;
+  // Contacts were dropped: a foot-geom/terrain-geom pair hit MuJoCo's 50 (mjMAXCONPAIR) or the
+  // model's contact or constraint buffer filled (heightfields much finer than 2 cm).
+  bool contact_cap_reached = false;
+};
+
+// The Bekker sinkage z of the foot under `load_n`: (p / (k_c/b + k_phi))^(1/n), p = load/area.
+double bekkerSinkage(double load_n, const LegConfig& config);
+
+// The MJCF of the world in `world_file` (a file name in the same directory, pulled in with
+// <include>) with the leg added at the origin, so it opens in MuJoCo's `simulate`.
+std::string legXml(const std::string& world_file, const std::string& world_xml_text,
+                   const LegConfig& config);
+// Writes legXml() beside `world_xml` as leg.xml and returns its path. Throws on I/O errors.
+std::filesystem::path writeLegWorld(const std::filesystem::path& world_xml, const LegConfig& config);
+
+// Steps the leg on (x, y) of the world in `world_xml`: moves the foot above it, lowers it until
+// load_n is carried, waits until it settles. The world's files are not changed (a temporary
+// leg_<pid>_<n>.xml is written beside them for MuJoCo's <include> and removed). Throws
+// std::invalid_argument for a bad config, std::runtime_error if MuJoCo cannot load the world or
+// no terrain lies under (x, y).
+LegOutcome stepLeg(const std::filesystem::path& world_xml, double x, double y,
+                   const LegConfig& config);
+
+// The rest pose of a rigid disk lowered vertically onto a height grid, without dynamics: the
+// plane under the disk that puts its centre lowest with no terrain point above it (the disk
+// touches, pivots about the contact, then about the line of two contacts, until the centre lies
+// over the contacts). heights(r, c) sits at (x0 + c·cell, y0 + r·cell), cells split along
+// (r,c)–(r+1,c+1) as in MuJoCo; NaN cells are ignored. z_m: the sole plane at (x, y).
+struct DiskRest {
+  double z_m = 0, tilt_deg = 0;
+};
+std::optional<DiskRest> restingDisk(const Eigen::MatrixXf& heights, double cell_m, double x0,
+                                    double y0, double x, double y, double diameter_m);
+
+}  // namespace ambler::sim

@@ -1,0 +1,210 @@
+// The simulated leg (sim/leg.cpp) against closed forms: a flat and a tilted plane, the Bekker law
+// on sand, a flat-topped rock, a ledge, and the quasi-static resting disk.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "fixtures.hpp"
+#include "sim/leg.hpp"
+#include "sim/world.hpp"
+
+namespace ambler::sim {
+namespace {
+
+using test::TempDir;
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+void print(const char* what, const LegOutcome& o) {
+  std::printf("%-28s settled %d t %.3f s  xyz (%.5f %.5f %.5f)  tilt %.3f deg  sink %.5f m  "
+              "slip %.5f m  drift %.6f m  load %.0f N  pair contacts %d ncon %d nefc %d%s\n",
+              what, o.settled, o.time_s, o.x_m, o.y_m, o.z_m, o.tilt_deg, o.sink_m, o.slip_m,
+              o.drift_m, o.load_n, o.max_pair_contacts, o.max_contacts, o.max_rows, o.contact_cap_reached ? " CAP" : "");
+}
+
+// A heightfield world from `terrain` in a temporary directory.
+struct LegWorld {
+  TempDir dir;
+  std::filesystem::path xml;
+  explicit LegWorld(const terrains::Terrain& t) : xml(writeWorld(t, dir.path(), "leg_test")) {}
+};
+
+// z = 0 for x <= edge, z = height beyond the next sample: a ledge one cell wide.
+terrains::Terrain ledge(double edge, double height, double cell, double half = 1.0) {
+  auto t = test::planeTerrain(0, 0, 0, half, cell);
+  for (int r = 0; r < t.ground.rows(); ++r)
+    for (int c = 0; c < t.ground.cols(); ++c)
+      if (t.ground.position(r, c).x() > edge + 1e-9) t.ground.at(r, c) = height;
+  return t;
+}
+
+// A flat plane with one box-shaped (flat-topped) rock of half sizes (hx, hy, hz) resting on it.
+terrains::Terrain planeWithSlab(double hx, double hy, double hz, double cell) {
+  auto t = test::planeTerrain(0, 0, 0, 1.0, cell);
+  terrains::Rock rock;
+  rock.center = {0, 0, hz};
+  for (int i = 0; i < 8; ++i)
+    rock.vertices.emplace_back((i & 1 ? 1 : -1) * hx, (i & 2 ? 1 : -1) * hy, (i & 4 ? 1 : -1) * hz);
+  // Counter-clockwise seen from outside.
+  rock.faces = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  rock.diameter_m = 2 * std::sqrt(4 * hx * hy / std::numbers::pi);
+  t.rocks.push_back(rock);
+  return t;
+}
+
+TEST(Leg, BekkerSinkageOfTheAmblerFoot) {
+  // 30 cm disk, b = radius: 4.1 kN gives p = 58.0 kPa and z = 5.09 cm.
+  LegConfig c;
+  EXPECT_NEAR(bekkerSinkage(4100, c), 0.0509, 0.0005);
+  EXPECT_DOUBLE_EQ(bekkerSinkage(0, c), 0.0);
+}
+
+// MuJoCo's stiff contacts (solref 4 ms, solimp 0.99) penetrate a0·(1−d)/(k·d²) at rest, with
+// a0 = load / mass ≈ 160 m/s², d = 0.99, k = 1/(d·τ)² ≈ 6.4e4 s⁻²: about 0.03 mm. Sinkage on rigid
+// ground is held to 0.1 mm.
+constexpr double kRigidSink = 1e-4;
+
+TEST(Leg, SettlesLevelOnAFlatRockPlane) {
+  LegWorld w(test::planeTerrain(0, 0, 0, 1.0, 0.05));
+  const LegOutcome o = stepLeg(w.xml, 0.013, -0.021, LegConfig{});
+  print("flat rock, 5 cm cells", o);
+  EXPECT_TRUE(o.settled);
+  EXPECT_LT(o.tilt_deg, 0.1);
+  EXPECT_LT(o.slip_m, 1e-3);
+  EXPECT_NEAR(o.sink_m, 0.0, kRigidSink);
+  EXPECT_NEAR(o.x_m, 0.013, 1e-3);
+  EXPECT_NEAR(o.y_m, -0.021, 1e-3);
+  EXPECT_NEAR(o.load_n, 4000, 40);  // the contacts carry the commanded load
+  EXPECT_FALSE(o.contact_cap_reached);
+}
+
+// On a 10° plane the passive ankle lays the foot flat on it. The foot first touches with its
+// uphill rim and then turns about the ankle, which the leg holds 5 cm above the sole, so the sole
+// centre travels t·sin 10° = 8.7 mm downhill: that seating is the slip reported here.
+TEST(Leg, LiesFlatOnATenDegreePlane) {
+  LegWorld w(test::planeTerrain(std::tan(10 * kDeg), 0, 0, 1.0, 0.05));
+  const LegConfig c;
+  const LegOutcome o = stepLeg(w.xml, 0.0, 0.0, c);
+  print("10 deg plane, 5 cm cells", o);
+  EXPECT_TRUE(o.settled);
+  EXPECT_NEAR(o.tilt_deg, 10.0, 0.5);
+  EXPECT_NEAR(o.sink_m, 0.0, kRigidSink);
+  EXPECT_NEAR(o.slip_m, c.foot_thickness_m * std::sin(10 * kDeg), 1e-3);
+}
+
+// Flat sand: the sinkage under two loads follows Bekker's law at a fine and a coarse grid.
+TEST(Leg, SinksInSandByTheBekkerLaw) {
+  for (double cell : {0.02, 0.10}) {
+    LegWorld w(test::planeTerrain(0, 0, 0, 1.0, cell));
+    for (double load : {2000.0, 4000.0}) {
+      LegConfig c;
+      c.soil = Soil::Sand;
+      c.load_n = load;
+      const LegOutcome o = stepLeg(w.xml, 0.0, 0.0, c);
+      const double z = bekkerSinkage(load, c);
+      char what[64];
+      std::snprintf(what, sizeof what, "sand, %.0f cm cells, %.0f N", cell * 100, load);
+      print(what, o);
+      std::printf("%-28s Bekker sinkage %.5f m, measured/Bekker %.4f\n", "", z, o.sink_m / z);
+      EXPECT_TRUE(o.settled) << what;
+      EXPECT_NEAR(o.sink_m, z, 0.10 * z) << what;
+      EXPECT_LT(o.tilt_deg, 0.1) << what;
+      EXPECT_LT(o.slip_m, 1e-3) << what;
+      EXPECT_FALSE(o.contact_cap_reached) << what;
+    }
+  }
+}
+
+// Rigid heightfields of 2, 5 and 10 cm cells: the foot neither falls through (sink within the
+// contact penetration) nor jitters (the sole centre moves < 0.1 mm over the 0.2 s hold).
+TEST(Leg, NeitherFallsThroughNorJittersOnHeightfields) {
+  for (double cell : {0.02, 0.05, 0.10}) {
+    LegWorld w(test::planeTerrain(0, 0, 0, 1.0, cell));
+    const LegOutcome o = stepLeg(w.xml, 0.0, 0.0, LegConfig{});
+    char what[64];
+    std::snprintf(what, sizeof what, "flat rock, %.0f cm cells", cell * 100);
+    print(what, o);
+    EXPECT_TRUE(o.settled) << what;
+    EXPECT_NEAR(o.sink_m, 0.0, kRigidSink) << what;
+    EXPECT_NEAR(o.z_m, 0.0, kRigidSink) << what;
+    EXPECT_LT(o.drift_m, 1e-4) << what;
+    EXPECT_LT(o.tilt_deg, 0.1) << what;
+    EXPECT_FALSE(o.contact_cap_reached) << what;
+  }
+}
+
+// A flat-topped rock (a 60 × 60 × 15 cm slab mesh) on sand: the foot stays on its top face, and
+// the rock stays rigid: no sinkage although the soil is sand.
+TEST(Leg, StaysOnTheFlatFaceOfARockOnSand) {
+  LegWorld w(planeWithSlab(0.3, 0.3, 0.075, 0.05));
+  for (const Eigen::Vector2d& at : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.12, 0.05)}) {
+    LegConfig c;
+    c.soil = Soil::Sand;
+    const LegOutcome o = stepLeg(w.xml, at.x(), at.y(), c);
+    print("slab on sand", o);
+    EXPECT_TRUE(o.settled);
+    EXPECT_NEAR(o.z_m, 0.15, kRigidSink);
+    EXPECT_NEAR(o.sink_m, 0.0, kRigidSink);
+    EXPECT_LT(o.tilt_deg, 0.1);
+    EXPECT_LT(o.slip_m, 1e-3);
+  }
+}
+
+// Half over a 10 cm ledge (centre 1 cm past the top edge): the foot TILTS, it does not slip. It
+// rocks over the edge until the contact on the edge comes under the ankle (the ankle sits 5 cm
+// above the sole, so tilting by θ moves the sole under it by t·sin θ), and rests there on the
+// edge alone, the same 8.5° at any ledge height taller than that.
+TEST(Leg, HalfOverALedgeTiltsAndDoesNotSlip) {
+  LegWorld w(ledge(0.0, 0.10, 0.05));  // the ledge's top edge is at x = 0.05
+  const LegOutcome o = stepLeg(w.xml, 0.04, 0.0, LegConfig{});
+  print("half over a 10 cm ledge", o);
+  EXPECT_TRUE(o.settled);
+  EXPECT_GT(o.tilt_deg, 5.0);
+  EXPECT_LT(o.tilt_deg, 12.0);
+  EXPECT_LT(o.slip_m, 2e-3);
+  EXPECT_GT(o.z_m, 0.09);  // still on the upper level
+}
+
+// leg.xml (the world plus the leg) is plain MJCF that MuJoCo loads, e.g. in `simulate`.
+TEST(Leg, WritesALegWorldThatLoads) {
+  LegWorld w(planeWithSlab(0.3, 0.3, 0.075, 0.05));
+  const auto xml = writeLegWorld(w.xml, LegConfig{});
+  EXPECT_EQ(xml.filename(), "leg.xml");
+  const World world = World::load(xml);
+  EXPECT_EQ(world.geomCount(), 2 + 2 + 25);  // terrain, rock; shaft, disk; 25 foot tiles
+}
+
+TEST(RestingDisk, PlanesAreExact) {
+  const auto flat = test::planeTerrain(0, 0, 0.3, 1.0, 0.05);
+  const auto r0 = restingDisk(flat.ground.heights().cast<float>(), 0.05, -1, -1, 0.01, 0.02, 0.3);
+  ASSERT_TRUE(r0.has_value());
+  EXPECT_NEAR(r0->z_m, 0.3, 1e-6);
+  EXPECT_NEAR(r0->tilt_deg, 0.0, 1e-6);
+  const auto tilted = test::planeTerrain(std::tan(10 * kDeg), 0, 0, 1.0, 0.05);
+  const auto r1 = restingDisk(tilted.ground.heights().cast<float>(), 0.05, -1, -1, 0.1, 0.0, 0.3);
+  ASSERT_TRUE(r1.has_value());
+  EXPECT_NEAR(r1->z_m, 0.1 * std::tan(10 * kDeg), 1e-5);  // float heights
+  EXPECT_NEAR(r1->tilt_deg, 10.0, 1e-3);
+  EXPECT_FALSE(restingDisk(flat.ground.heights().cast<float>(), 0.05, -1, -1, 5, 5, 0.3));
+}
+
+// restingDisk against MuJoCo where geometry decides: a foot 3 cm past the edge of a 5 cm ledge
+// rocks over until its rim meets the lower ground, resting on the edge and the rim.
+TEST(RestingDisk, MatchesTheLegOnALowLedge) {
+  const auto t = ledge(0.0, 0.05, 0.05);
+  LegWorld w(t);
+  const LegOutcome o = stepLeg(w.xml, 0.02, 0.0, LegConfig{});
+  const auto rest = restingDisk(t.ground.heights().cast<float>(), 0.05, -1, -1, 0.02, 0.0, 0.3);
+  ASSERT_TRUE(rest.has_value());
+  print("3 cm past a 5 cm ledge", o);
+  std::printf("%-28s restingDisk z %.5f m tilt %.3f deg\n", "", rest->z_m, rest->tilt_deg);
+  EXPECT_TRUE(o.settled);
+  EXPECT_NEAR(o.tilt_deg, rest->tilt_deg, 0.5);
+  EXPECT_NEAR(o.z_m, rest->z_m, 2e-3);
+}
+
+}  // namespace
+}  // namespace ambler::sim
