@@ -64,6 +64,7 @@ struct RunState {
   bool progress = true;
 
   std::optional<sim::World> world;  // world stage
+  std::filesystem::path world_xml;  // world stage: the world's MJCF in the run directory
   std::unique_ptr<sim::RayScene> scene;
   std::unique_ptr<sim::GroundTruth> truth;
   std::vector<ViewState> views;      // one per scenario view

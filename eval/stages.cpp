@@ -24,6 +24,7 @@ const std::vector<Stage>& runStages() {
       stages::match(),
       stages::merge(),
       stages::footfall(),
+      stages::leg(),
   };
   return all;
 }

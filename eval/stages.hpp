@@ -26,6 +26,7 @@ Stage cartesian();  // the Cartesian baseline of each scan, scored; maps/
 Stage match();      // each pair of views registered by each method, scored; matching/
 Stage merge();      // the composite map of every view, scored; maps/composite_*
 Stage footfall();   // each method's footfall on a map, scored on the true surface; footfall/
+Stage leg();        // the MuJoCo leg steps on each choice; leg/, world/leg.xml
 }  // namespace stages
 
 }  // namespace ambler::eval

@@ -25,10 +25,12 @@ void run(RunState& s) {
   if (sc.terrain.kind == terrains::TerrainKind::Mjcf) {
     s.world.emplace(sim::World::load(sc.terrain.mjcf));
     s.world->saveLastXml(s.out / "world" / "world.xml");
+    s.world_xml = s.out / "world" / "world.xml";
     s.say("world     " + sc.terrain.mjcf + " (" + std::to_string(s.world->geomCount()) + " geoms)");
   } else {
     const terrains::Terrain terrain = terrains::makeTerrain(sc.terrain, sc.seed);
     const std::filesystem::path xml = sim::writeWorld(terrain, s.out / "world", sc.name);
+    s.world_xml = xml;
     s.world.emplace(sim::World::load(xml));
     s.say("world     " + std::to_string(terrain.ground.rows()) + "x" + std::to_string(terrain.ground.cols()) +
           " heightfield, " + std::to_string(terrain.rocks.size()) + " rocks -> " + xml.string());

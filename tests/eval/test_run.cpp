@@ -20,6 +20,7 @@
 #include "perception/sensor_geometry.hpp"
 #include "picture_checks.hpp"
 #include "sim/ground_truth.hpp"
+#include "sim/leg.hpp"
 #include "sim/ray_scene.hpp"
 #include "sim/world.hpp"
 #include "test_support.hpp"
@@ -385,6 +386,41 @@ TEST(Run, FootfallStageChoosesTheLowestScoreAndScoresItOnTheTruth) {
     const double p = f["truth_percentile"].get<double>();
     EXPECT_GE(p, 0.0) << method;
     EXPECT_LE(p, 1.0) << method;
+  }
+}
+
+// The leg stage on flat ground: on rock the foot settles level (tilt < 0.1°, slip < 1 mm, sink
+// < 1 mm); on sand it sinks by Bekker's law for the load (within 10 %), docs/leg.md.
+TEST(Run, LegStageStepsOnEachChoice) {
+  for (const char* soil : {"rock", "sand"}) {
+    const Scenario sc = parseScenario(std::string(R"(name: leg_test
+seed: 1
+terrain: {kind: plane, size_m: [8, 8], cell_m: 0.05}
+sensor: {noise_k: 0, quantization_m: 0, mixed_pixels: false}
+views: [{xyz_m: [0, -3, 2.0], rpy_deg: [0, -35, 0]}]
+map: {cell_m: 0.1, region: {x_m: [-2, 2], y_m: [-1, 3]}, baseline: none}
+footfall: {region: {x_m: [-0.5, 0.5], y_m: [0.5, 1.5]}, methods: [max_min, equilibrium]}
+leg: {soil: )") + soil + ", load_n: 3000}\n",
+                                      "inline.yaml");
+    test::TempDir run;
+    const auto metrics = runScenario(sc, {run.dir, false});
+    EXPECT_TRUE(std::filesystem::exists(run.dir / "world" / "leg.xml"));
+    ASSERT_EQ(metrics["footfall"].size(), 2u);
+    sim::LegConfig config;
+    config.load_n = 3000;
+    const double expected_sink = std::string(soil) == "sand" ? sim::bekkerSinkage(3000, config) : 0.0;
+    for (const auto& f : metrics["footfall"]) {
+      const auto& leg = f["leg"];
+      SCOPED_TRACE(std::string(soil) + " " + f["method"].get<std::string>());
+      EXPECT_TRUE(leg["settled"].get<bool>());
+      EXPECT_LT(leg["tilt_deg"].get<double>(), 0.1);
+      EXPECT_LT(leg["slip_m"].get<double>(), 0.001);
+      if (expected_sink > 0)
+        EXPECT_NEAR(leg["sink_m"].get<double>(), expected_sink, 0.1 * expected_sink);
+      else
+        EXPECT_LT(leg["sink_m"].get<double>(), 0.001);
+      EXPECT_TRUE(std::filesystem::exists(run.dir / "leg" / (f["method"].get<std::string>() + ".json")));
+    }
   }
 }
 

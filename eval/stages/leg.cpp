@@ -1,0 +1,73 @@
+// The leg stage (docs/scenario.md, "leg"; docs/leg.md): the simulated leg steps on each footfall
+// method's choice in the run's MuJoCo world (sim::stepLeg) and reports the foot's tilt, sink, slip
+// and whether it settled, beside the tilt and height a rigid disk would rest at on the true
+// surface (sim::restingDisk, no dynamics). world/leg.xml (the world with the leg, for MuJoCo's
+// simulate), leg/METHOD.json, metrics.footfall[k].leg.
+#include <cmath>
+#include <cstdio>
+
+#include "eval/io.hpp"
+#include "eval/stages.hpp"
+#include "sim/leg.hpp"
+
+namespace ambler::eval::stages {
+
+namespace {
+
+nlohmann::ordered_json number(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); }
+
+void run(RunState& s) {
+  const Scenario& sc = s.scenario;
+  const LegSpec& spec = *sc.leg;
+  sim::LegConfig config;
+  config.foot_diameter_m = sc.footfall->foot_diameter_m;
+  config.load_n = spec.load_n;
+  config.soil = spec.soil == Soil::Sand ? sim::Soil::Sand : sim::Soil::Rock;
+  sim::writeLegWorld(s.world_xml, config);
+  std::filesystem::create_directories(s.out / "leg");
+  // The true surface on the footfall map's grid, rows flipped to restingDisk's (row 0 at the
+  // smallest y).
+  const perception::MapGrid grid = sc.footfall->map_view < 0 ? s.composite->grid() : s.views[0].locus->map.grid();
+  const perception::ElevationMap truth = s.truth->elevation(grid);
+  const Eigen::MatrixXf heights = truth.elevation().colwise().reverse();
+  const double x0 = grid.x_min + 0.5 * grid.cell, y0 = grid.y_max - (grid.rows - 0.5) * grid.cell;
+  for (std::size_t k = 0; k < s.choices.size(); ++k) {
+    const FootfallChoice& c = s.choices[k];
+    nlohmann::ordered_json j;
+    j["x_m"] = number(c.x_m);
+    j["y_m"] = number(c.y_m);
+    if (!std::isfinite(c.x_m)) {
+      for (const char* key : {"tilt_deg", "sink_m", "slip_m"}) j[key] = nullptr;
+      j["settled"] = false;
+    } else {
+      Stopwatch t;
+      const sim::LegOutcome o = sim::stepLeg(s.world_xml, c.x_m, c.y_m, config);
+      s.addTime("leg", t.seconds());
+      const auto rest = sim::restingDisk(heights, grid.cell, x0, y0, c.x_m, c.y_m, config.foot_diameter_m);
+      j["tilt_deg"] = o.tilt_deg;
+      j["sink_m"] = o.sink_m;
+      j["slip_m"] = o.slip_m;
+      j["settled"] = o.settled;
+      j["contact_cap_reached"] = o.contact_cap_reached;
+      j["predicted_tilt_deg"] = rest ? number(rest->tilt_deg) : nlohmann::ordered_json(nullptr);
+      char predicted[32] = "-", line[220];
+      if (rest) std::snprintf(predicted, sizeof predicted, "%.2f deg", rest->tilt_deg);
+      std::snprintf(line, sizeof line, "leg       %-21s tilt %5.2f deg (rigid disk on the truth: %s), sink %.1f mm, slip %.1f mm%s%s",
+                    c.method.c_str(), o.tilt_deg, predicted, 1000 * o.sink_m, 1000 * o.slip_m,
+                    o.settled ? "" : ", NOT SETTLED", o.contact_cap_reached ? ", CONTACT CAP REACHED" : "");
+      s.say(line);
+    }
+    writeJson(s.out / "leg" / (c.method + ".json"), j);
+    nlohmann::ordered_json m;
+    for (const char* key : {"tilt_deg", "sink_m", "slip_m", "settled"}) m[key] = j[key];
+    s.metrics["footfall"][k]["leg"] = m;
+  }
+}
+
+}  // namespace
+
+Stage leg() {
+  return {"leg", [](const Scenario& sc) { return sc.leg.has_value(); }, run};
+}
+
+}  // namespace ambler::eval::stages
