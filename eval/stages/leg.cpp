@@ -2,9 +2,10 @@
 // method's choice in the run's MuJoCo world (sim::stepLeg) and reports the foot's tilt, sink, slip
 // and whether it settled, beside the tilt and height a rigid disk would rest at on the true
 // surface (sim::restingDisk, no dynamics). world/leg.xml (the world with the leg, for MuJoCo's
-// simulate), leg/METHOD.json, metrics.footfall[k].leg.
+// simulate), leg/METHOD.json, leg/predicted_tilt.tiff (every candidate), metrics.footfall[k].leg.
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "eval/io.hpp"
 #include "eval/stages.hpp"
@@ -31,6 +32,21 @@ void run(RunState& s) {
   const perception::ElevationMap truth = s.truth->elevation(grid);
   const Eigen::MatrixXf heights = truth.elevation().colwise().reverse();
   const double x0 = grid.x_min + 0.5 * grid.cell, y0 = grid.y_max - (grid.rows - 0.5) * grid.cell;
+  // The prediction for every candidate centre of the region: the tilt a rigid disk rests at on the
+  // true surface (leg/predicted_tilt.tiff, NaN outside the region or where no rest exists).
+  {
+    const FootfallSpec& ff = *sc.footfall;
+    const perception::CellRegion region = perception::regionOfBox(grid, ff.x_m[0], ff.x_m[1], ff.y_m[0], ff.y_m[1]);
+    perception::Raster<float> tilt =
+        perception::Raster<float>::Constant(grid.rows, grid.cols, std::numeric_limits<float>::quiet_NaN());
+    for (int r = region.row0; r < region.row0 + region.rows; ++r)
+      for (int c = region.col0; c < region.col0 + region.cols; ++c) {
+        const Eigen::Vector2d xy = grid.center(r, c);
+        if (const auto rest = sim::restingDisk(heights, grid.cell, x0, y0, xy.x(), xy.y(), config.foot_diameter_m))
+          tilt(r, c) = float(rest->tilt_deg);
+      }
+    writeTiff(s.out / "leg" / "predicted_tilt.tiff", tilt);
+  }
   for (std::size_t k = 0; k < s.choices.size(); ++k) {
     const FootfallChoice& c = s.choices[k];
     nlohmann::ordered_json j;

@@ -406,6 +406,17 @@ leg: {soil: )") + soil + ", load_n: 3000}\n",
     const auto metrics = runScenario(sc, {run.dir, false});
     EXPECT_TRUE(std::filesystem::exists(run.dir / "world" / "leg.xml"));
     ASSERT_EQ(metrics["footfall"].size(), 2u);
+    // A rigid disk rests level on flat ground at every candidate of the region (10 × 10 cells).
+    const cv::Mat predicted = cv::imread((run.dir / "leg" / "predicted_tilt.tiff").string(), cv::IMREAD_UNCHANGED);
+    ASSERT_FALSE(predicted.empty());
+    int candidates = 0;
+    for (int r = 0; r < predicted.rows; ++r)
+      for (int c = 0; c < predicted.cols; ++c)
+        if (std::isfinite(predicted.at<float>(r, c))) {
+          ++candidates;
+          EXPECT_LT(std::abs(predicted.at<float>(r, c)), 0.01);
+        }
+    EXPECT_EQ(candidates, 100);
     sim::LegConfig config;
     config.load_n = 3000;
     const double expected_sink = std::string(soil) == "sand" ? sim::bekkerSinkage(3000, config) : 0.0;
