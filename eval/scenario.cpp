@@ -431,6 +431,11 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
 
 }  // namespace
 
+perception::CellRegion FootfallSpec::candidates(const perception::MapGrid& grid) const {
+  const double r = 0.5 * foot_diameter_m;
+  return perception::regionOfBox(grid, x_m[0] + r, x_m[1] - r, y_m[0] + r, y_m[1] - r);
+}
+
 const char* soilName(Soil s) { return s == Soil::Sand ? "sand" : "rock"; }
 const char* mergePosesName(MergePoses p) { return p == MergePoses::Matched ? "matched" : "true"; }
 perception::MapGrid MergeSpec::grid() const {

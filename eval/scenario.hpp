@@ -107,6 +107,9 @@ struct FootfallSpec {
   double foot_diameter_m = 0.30;
   std::vector<perception::FootfallMethod> methods{perception::kFootfallMethods.begin(),
                                                   perception::kFootfallMethods.end()};
+  // The candidate centres: the cells of `grid` whose centres lie at least a foot radius inside the
+  // region, so that the whole foot B lies in R (§5: B is a subregion of R).
+  perception::CellRegion candidates(const perception::MapGrid& grid) const;
 };
 
 // The simulated leg (docs/scenario.md, "leg"): steps on each method's choice.

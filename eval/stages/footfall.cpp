@@ -71,7 +71,7 @@ void run(RunState& s) {
   const std::string map_name = spec.map_view < 0 ? "composite" : viewName(spec.map_view);
   const perception::MapGrid& grid = map.grid();
   const perception::ElevationMap truth = s.truth->elevation(grid);
-  const perception::CellRegion region = perception::regionOfBox(grid, spec.x_m[0], spec.x_m[1], spec.y_m[0], spec.y_m[1]);
+  const perception::CellRegion region = spec.candidates(grid);
   perception::FootfallConfig config;
   config.foot_diameter_m = spec.foot_diameter_m;
   Stopwatch t;

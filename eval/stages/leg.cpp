@@ -36,7 +36,7 @@ void run(RunState& s) {
   // true surface (leg/predicted_tilt.tiff, NaN outside the region or where no rest exists).
   {
     const FootfallSpec& ff = *sc.footfall;
-    const perception::CellRegion region = perception::regionOfBox(grid, ff.x_m[0], ff.x_m[1], ff.y_m[0], ff.y_m[1]);
+    const perception::CellRegion region = ff.candidates(grid);
     perception::Raster<float> tilt =
         perception::Raster<float>::Constant(grid.rows, grid.cols, std::numeric_limits<float>::quiet_NaN());
     for (int r = region.row0; r < region.row0 + region.rows; ++r)
