@@ -73,39 +73,35 @@ int main(int argc, char** argv) {
 
   auto* bench = app.add_subcommand("bench", "Measure speed; prints a table of medians.");
   bench->require_subcommand(1);
+  // A bench subcommand with the options every benchmark has: --json FILE and --reps N.
+  const auto benchCommand = [&](const char* name, const char* what, std::string& json, BenchOptions& opt) {
+    CLI::App* b = bench->add_subcommand(name, what);
+    b->add_option("--json", json, "Also write the figures to this JSON file");
+    b->add_option("--reps", opt.repetitions, "Repetitions per measurement (median reported)")->check(CLI::Range(1, 1000));
+    return b;
+  };
   BenchOptions bench_opt;
   std::string bench_json;
-  auto* bench_scan = bench->add_subcommand("scan", "ERIM emulator vs mj_ray (1 thread, 64x256) and vs a "
-                                                   "bare Embree packet cast (all cores, 1024x4096).");
-  bench_scan->add_option("--json", bench_json, "Also write the figures to this JSON file");
-  bench_scan->add_option("--reps", bench_opt.repetitions, "Repetitions per measurement (median reported)")
-      ->check(CLI::Range(1, 1000));
+  auto* bench_scan = benchCommand("scan", "ERIM emulator vs mj_ray (1 thread, 64x256) and vs a "
+                                          "bare Embree packet cast (all cores, 1024x4096).", bench_json, bench_opt);
 
   std::string bench_map_json;
   BenchOptions bench_map_opt;
-  auto* bench_map = bench->add_subcommand("map", "Locus map ns/cell at 2, 5, 10, 20 cm (1 thread and all "
-                                                 "cores) vs the Cartesian baseline.");
-  bench_map->add_option("--json", bench_map_json, "Also write the figures to this JSON file");
-  bench_map->add_option("--reps", bench_map_opt.repetitions, "Repetitions per measurement (median reported)")
-      ->check(CLI::Range(1, 1000));
+  auto* bench_map = benchCommand("map", "Locus map ns/cell at 2, 5, 10, 20 cm (1 thread and all "
+                                        "cores) vs the Cartesian baseline.", bench_map_json, bench_map_opt);
 
   std::string bench_match_json, bench_match_scenario = "scenarios/demo.yaml";
   BenchOptions bench_match_opt;
-  auto* bench_match = bench->add_subcommand("match", "Iconic matching per pair and method, ms and iterations "
-                                                     "(1 thread and all cores), on a scenario's first pair.");
+  auto* bench_match = benchCommand("match", "Every matching method per pair, ms and iterations (1 thread and "
+                                            "all cores), on a scenario's first pair.", bench_match_json, bench_match_opt);
   bench_match->add_option("--scenario", bench_match_scenario, "A scenario with map and matching sections")
       ->capture_default_str();
-  bench_match->add_option("--json", bench_match_json, "Also write the figures to this JSON file");
-  bench_match->add_option("--reps", bench_match_opt.repetitions, "Repetitions per measurement (median reported)")
-      ->check(CLI::Range(1, 1000));
 
   std::string bench_footfall_json;
   BenchOptions bench_footfall_opt;
-  auto* bench_footfall = bench->add_subcommand("footfall", "Footfall evaluation, all methods dense over 10 000 "
-                                                           "candidates at 10 and 2 cm (1 thread and all cores).");
-  bench_footfall->add_option("--json", bench_footfall_json, "Also write the figures to this JSON file");
-  bench_footfall->add_option("--reps", bench_footfall_opt.repetitions, "Repetitions per measurement (median reported)")
-      ->check(CLI::Range(1, 1000));
+  auto* bench_footfall = benchCommand("footfall", "Footfall evaluation, all methods dense over 10 000 candidates "
+                                                  "at 10 and 2 cm (1 thread and all cores).", bench_footfall_json,
+                                      bench_footfall_opt);
 
   auto* experiment = app.add_subcommand("experiment", "Run one of the paper's experiments as sweeps; prints its "
                                                       "markdown tables (see docs/experiments/).");
