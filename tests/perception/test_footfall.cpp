@@ -10,7 +10,6 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -512,28 +511,7 @@ TEST(Footfall, BadInputThrowsWithAClearMessage) {
   expectInvalid([&] { evaluateFootfalls(map, wholeMap(g), cfg); }, "max_unknown_fraction");
 }
 
-// 10 000 candidates (100 × 100 centres), all six methods, at 10 cm (9-cell disks) and at 2 cm
-// (177-cell disks). Printed, not asserted: the machine is shared.
-TEST(Footfall, TimingOfTenThousandCandidates) {
-  for (double cell : {0.1, 0.02}) {
-    const int reach = cell > 0.05 ? 1 : 7;
-    const double side = (100 + 2 * reach) * cell;
-    const MapGrid g = MapGrid::covering(0, side, 0, side, cell);
-    const ElevationMap map = surfaceMap(
-        g, [](double x, double y) { return 0.05 * std::sin(7 * x) * std::cos(5 * y) + 0.01 * std::sin(40 * x * y); },
-        0.01);
-    const CellRegion reg{reach, reach, 100, 100};
-    double best = INFINITY;
-    for (int rep = 0; rep < 5; ++rep) {
-      const auto t0 = std::chrono::steady_clock::now();
-      const auto all = evaluateFootfalls(map, reg);
-      const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-      best = std::min(best, ms);
-      ASSERT_TRUE(of(all, M::Equilibrium).best);
-    }
-    std::printf("[ timing   ] 10000 candidates, 6 methods, %.0f cm cells: %.2f ms (best of 5)\n", cell * 100, best);
-  }
-}
+// Speed is `ambler bench footfall`'s (docs/benchmarks.md), not a test's.
 
 }  // namespace
 }  // namespace ambler::perception
