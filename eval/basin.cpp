@@ -34,11 +34,7 @@ constexpr std::uint64_t kBasinStream = 7001;  // the trials' directions: indepen
 const std::vector<std::string> kHeader{"method", "translation_m", "rotation_deg", "trial", "translation_error_m",
                                        "rotation_error_deg", "success", "iterations", "time_s"};
 
-std::string numberText(double v) {
-  if (!std::isfinite(v)) return "";
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-}
+using sweep_detail::numberText;
 
 std::size_t drawCount(const BasinGrid& g) {
   return g.translation_m.size() * g.rotation_deg.size() * std::size_t(g.trials);
@@ -88,6 +84,13 @@ struct Tally {
   std::vector<std::vector<double>> ok_err;            // [method] translation errors of the successes
 };
 
+// The middle value of a non-empty list, or the mean of the two middle values.
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t h = v.size() / 2;
+  return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
+}
+
 // For each rotation, the largest translation up to which every cell reaches `level` (NaN: not
 // even the first); what basin_boundary.png draws.
 std::vector<double> boundary(const BasinGrid& g, const std::vector<double>& rate, double level) {
@@ -127,13 +130,10 @@ std::string summary(const Scenario& sc, const BasinOptions& opt, const Tally& t,
     char buf[64];
     std::snprintf(buf, sizeof buf, "%d/%d (%.0f %%)", ok, n, n ? 100.0 * ok / n : 0.0);
     md += "| " + methods[m].label + " | " + buf + " | ";
-    std::vector<double> e = t.ok_err[m];
-    std::sort(e.begin(), e.end());
-    if (e.empty()) {
+    if (t.ok_err[m].empty()) {
       md += "— |";
     } else {
-      const double med = e.size() % 2 ? e[e.size() / 2] : 0.5 * (e[e.size() / 2 - 1] + e[e.size() / 2]);
-      std::snprintf(buf, sizeof buf, "%.1f mm |", 1000 * med);
+      std::snprintf(buf, sizeof buf, "%.1f mm |", 1000 * median(t.ok_err[m]));
       md += buf;
     }
     for (const double b : boundary(g, methods[m].rate, 0.95)) md += std::isfinite(b) ? " " + numberText(b) + " m |" : " — |";
@@ -185,11 +185,9 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
     for (std::size_t c = 0; c < cells; ++c) {
       h.successes.push_back(t.ok[m][c]);
       h.trials.push_back(t.n[m][c]);
-      auto e = t.err[m][c];
       std::string note;
-      if (!e.empty()) {
-        std::sort(e.begin(), e.end());
-        const double med = e.size() % 2 ? e[e.size() / 2] : 0.5 * (e[e.size() / 2 - 1] + e[e.size() / 2]);
+      if (!t.err[m][c].empty()) {
+        const double med = median(t.err[m][c]);
         char buf[32];
         std::snprintf(buf, sizeof buf, med < 0.1 ? "%.1f cm" : "%.2f m", med < 0.1 ? 100 * med : med);
         note = buf;

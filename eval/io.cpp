@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <stdexcept>
@@ -59,6 +60,10 @@ perception::Raster<float> readTiff(const std::filesystem::path& path) {
   for (int r = 0; r < m.rows; ++r)
     for (int c = 0; c < m.cols; ++c) out(r, c) = m.at<float>(r, c);
   return out;
+}
+
+nlohmann::ordered_json jsonNumber(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
 }
 
 }  // namespace ambler::eval

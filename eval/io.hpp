@@ -22,6 +22,10 @@ void writePng(const std::filesystem::path& path, const cv::Mat& image);
 // Binary little-endian PLY of points (float x, y, z).
 void writePly(const std::filesystem::path& path, const std::vector<Eigen::Vector3f>& points);
 
+// A number for metrics.json and the run's JSON files: JSON has no NaN or infinity, so a figure
+// that is not defined is null.
+nlohmann::ordered_json jsonNumber(double v);
+
 // Reads a float32 TIFF back (for tests and tools). Throws std::runtime_error naming the file.
 perception::Raster<float> readTiff(const std::filesystem::path& path);
 

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "eval/io.hpp"
+
 namespace ambler::eval {
 
 namespace {
@@ -22,11 +24,6 @@ double quantile(const std::vector<double>& sorted, double p) {
   const auto lo = std::size_t(std::floor(h));
   if (lo + 1 >= sorted.size()) return sorted.back();
   return sorted[lo] + (h - double(lo)) * (sorted[lo + 1] - sorted[lo]);
-}
-
-// JSON has no NaN: an undefined figure is null.
-nlohmann::ordered_json number(double v) {
-  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
 }
 
 // The sums of one range band while the cells are scanned.
@@ -47,13 +44,13 @@ nlohmann::ordered_json bandsJson(const std::vector<BandMetrics>& bands) {
   auto out = nlohmann::ordered_json::array();
   for (const auto& b : bands) {
     nlohmann::ordered_json j;
-    j["range_m"] = {b.lo_m, number(b.hi_m)};
+    j["range_m"] = {b.lo_m, jsonNumber(b.hi_m)};
     j["visible"] = b.visible;
     j["known"] = b.known;
-    j["coverage"] = number(b.coverage);
-    j["rms_error_m"] = number(b.rms_error_m);
-    j["median_abs_error_m"] = number(b.median_abs_error_m);
-    j["within_1sigma"] = number(b.within_1sigma);
+    j["coverage"] = jsonNumber(b.coverage);
+    j["rms_error_m"] = jsonNumber(b.rms_error_m);
+    j["median_abs_error_m"] = jsonNumber(b.median_abs_error_m);
+    j["within_1sigma"] = jsonNumber(b.within_1sigma);
     out.push_back(std::move(j));
   }
   return out;
@@ -153,16 +150,16 @@ nlohmann::ordered_json toJson(const MapMetrics& m, int view) {
   nlohmann::ordered_json j;
   j["view"] = view;
   j["cells"] = m.cells;
-  j["coverage"] = number(m.coverage);
-  j["rms_error_m"] = number(m.rms_error_m);
-  j["median_abs_error_m"] = number(m.median_abs_error_m);
-  j["shadow_precision"] = number(m.shadow_precision);
-  j["shadow_recall"] = number(m.shadow_recall);
-  j["within_1sigma"] = number(m.within_1sigma);
-  j["within_2sigma"] = number(m.within_2sigma);
+  j["coverage"] = jsonNumber(m.coverage);
+  j["rms_error_m"] = jsonNumber(m.rms_error_m);
+  j["median_abs_error_m"] = jsonNumber(m.median_abs_error_m);
+  j["shadow_precision"] = jsonNumber(m.shadow_precision);
+  j["shadow_recall"] = jsonNumber(m.shadow_recall);
+  j["within_1sigma"] = jsonNumber(m.within_1sigma);
+  j["within_2sigma"] = jsonNumber(m.within_2sigma);
   j["known"] = m.known;
-  j["max_abs_error_m"] = number(m.max_abs_error_m);
-  j["p95_abs_error_m"] = number(m.p95_abs_error_m);
+  j["max_abs_error_m"] = jsonNumber(m.max_abs_error_m);
+  j["p95_abs_error_m"] = jsonNumber(m.p95_abs_error_m);
   j["known_in_shadow_above_3sigma"] = m.known_in_shadow_above_3sigma;
   j["shadow"] = m.shadow;
   j["visible"] = m.visible;
@@ -175,15 +172,15 @@ nlohmann::ordered_json toJson(const MapMetrics& m, int view) {
 nlohmann::ordered_json cartesianJson(const MapMetrics& m, int view) {
   nlohmann::ordered_json j;
   j["view"] = view;
-  j["coverage"] = number(m.coverage);
-  j["rms_error_m"] = number(m.rms_error_m);
-  j["median_abs_error_m"] = number(m.median_abs_error_m);
+  j["coverage"] = jsonNumber(m.coverage);
+  j["rms_error_m"] = jsonNumber(m.rms_error_m);
+  j["median_abs_error_m"] = jsonNumber(m.median_abs_error_m);
   j["cells"] = m.cells;
   j["known"] = m.known;
-  j["max_abs_error_m"] = number(m.max_abs_error_m);
-  j["p95_abs_error_m"] = number(m.p95_abs_error_m);
-  j["within_1sigma"] = number(m.within_1sigma);
-  j["within_2sigma"] = number(m.within_2sigma);
+  j["max_abs_error_m"] = jsonNumber(m.max_abs_error_m);
+  j["p95_abs_error_m"] = jsonNumber(m.p95_abs_error_m);
+  j["within_1sigma"] = jsonNumber(m.within_1sigma);
+  j["within_2sigma"] = jsonNumber(m.within_2sigma);
   j["compared"] = m.compared;
   if (!m.bands.empty()) j["by_range"] = bandsJson(m.bands);
   return j;
@@ -194,16 +191,16 @@ nlohmann::ordered_json compositeJson(const MapMetrics& m, int views, const char*
   j["views"] = views;
   j["poses"] = poses;
   j["cells"] = m.cells;
-  j["coverage"] = number(m.coverage);
-  j["rms_error_m"] = number(m.rms_error_m);
-  j["median_abs_error_m"] = number(m.median_abs_error_m);
-  j["within_1sigma"] = number(m.within_1sigma);
-  j["within_2sigma"] = number(m.within_2sigma);
+  j["coverage"] = jsonNumber(m.coverage);
+  j["rms_error_m"] = jsonNumber(m.rms_error_m);
+  j["median_abs_error_m"] = jsonNumber(m.median_abs_error_m);
+  j["within_1sigma"] = jsonNumber(m.within_1sigma);
+  j["within_2sigma"] = jsonNumber(m.within_2sigma);
   j["known"] = m.known;
   j["shadow"] = m.shadow;
   j["compared"] = m.compared;
-  j["p95_abs_error_m"] = number(m.p95_abs_error_m);
-  j["max_abs_error_m"] = number(m.max_abs_error_m);
+  j["p95_abs_error_m"] = jsonNumber(m.p95_abs_error_m);
+  j["max_abs_error_m"] = jsonNumber(m.max_abs_error_m);
   return j;
 }
 

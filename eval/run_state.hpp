@@ -71,6 +71,7 @@ struct RunState {
   std::vector<PairEstimate> estimates;  // match stage: per pair and method, in run order
   std::optional<perception::ElevationMap> composite;  // merge stage
   std::vector<FootfallChoice> choices;  // footfall stage: per method, in the scenario's order
+  std::optional<perception::ElevationMap> footfall_truth;  // footfall stage: the truth on its map's grid
 
   nlohmann::ordered_json metrics;    // metrics.json; stages add their keys in stage order
   nlohmann::ordered_json timing;     // metrics.json's timing_s: seconds per stage

@@ -19,6 +19,11 @@ bool allDigits(std::string_view s);
 // The whole file; throws SweepError naming `who` when it cannot be opened or read.
 std::string readText(const std::filesystem::path& file, const std::string& who);
 
+// Defined in sweep_run.cpp.
+// A number as a results.csv cell: the shortest text that reads back to the same double; "" for a
+// non-finite one (null in metrics.json).
+std::string numberText(double v);
+
 // Defined in sweep_results.cpp.
 // One results.csv line: the cells CSV-quoted where needed, comma-separated, "\n"-terminated.
 std::string csvLine(const std::vector<std::string>& cells);

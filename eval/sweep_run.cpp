@@ -29,12 +29,6 @@ using namespace sweep_detail;
 
 using Row = std::vector<std::pair<std::string, std::string>>;  // column, cell text
 
-std::string numberText(double v) {
-  if (!std::isfinite(v)) return "";  // as in metrics.json, where a non-finite number is null
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-}
-
 // The scalar leaves of metrics.json in document order, arrays by index: map.0.rms_error_m. The
 // measured times (timing_s, and time_s of each registration) only with `timing`: they are the
 // figures that are not reproducible.
@@ -132,6 +126,12 @@ std::string progressLine(const Sweep& sweep, std::size_t k, const nlohmann::orde
 }
 
 }  // namespace
+
+std::string sweep_detail::numberText(double v) {
+  if (!std::isfinite(v)) return "";  // as in metrics.json, where a non-finite number is null
+  char buf[32];
+  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
+}
 
 Shard parseShard(const std::string& text) {
   const auto parts = split(text, '/');

@@ -21,8 +21,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-nlohmann::ordered_json number(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); }
-
 // The map's relief around the region (0.5 m beyond it), the region's outline and each method's
 // foot where it chose, in plotColour(k), with a legend of method and true percentile.
 cv::Mat choicesPicture(const perception::ElevationMap& map, const FootfallSpec& spec,
@@ -70,7 +68,8 @@ void run(RunState& s) {
   const perception::ElevationMap& map = spec.map_view < 0 ? *s.composite : s.views[std::size_t(spec.map_view)].locus->map;
   const std::string map_name = spec.map_view < 0 ? "composite" : viewName(spec.map_view);
   const perception::MapGrid& grid = map.grid();
-  const perception::ElevationMap truth = s.truth->elevation(grid);
+  s.footfall_truth = s.truth->elevation(grid);
+  const perception::ElevationMap& truth = *s.footfall_truth;
   const perception::CellRegion region = spec.candidates(grid);
   perception::FootfallConfig config;
   config.foot_diameter_m = spec.foot_diameter_m;
@@ -101,11 +100,11 @@ void run(RunState& s) {
     s.choices.push_back(choice);
     nlohmann::ordered_json j;
     j["method"] = name;
-    j["x_m"] = number(choice.x_m);
-    j["y_m"] = number(choice.y_m);
-    j["score"] = number(choice.score);
-    j["truth_score"] = number(choice.truth_score);
-    j["truth_percentile"] = number(choice.truth_percentile);
+    j["x_m"] = jsonNumber(choice.x_m);
+    j["y_m"] = jsonNumber(choice.y_m);
+    j["score"] = jsonNumber(choice.score);
+    j["truth_score"] = jsonNumber(choice.truth_score);
+    j["truth_percentile"] = jsonNumber(choice.truth_percentile);
     writeJson(s.out / "footfall" / (name + ".json"), j);
     writeTiff(s.out / "footfall" / (name + "_score.tiff"), scores[m].score);
     s.metrics["footfall"].push_back(j);

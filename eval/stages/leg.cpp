@@ -15,8 +15,6 @@ namespace ambler::eval::stages {
 
 namespace {
 
-nlohmann::ordered_json number(double v) { return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr); }
-
 void run(RunState& s) {
   const Scenario& sc = s.scenario;
   const LegSpec& spec = *sc.leg;
@@ -26,11 +24,10 @@ void run(RunState& s) {
   config.soil = spec.soil == Soil::Sand ? sim::Soil::Sand : sim::Soil::Rock;
   sim::writeLegWorld(s.world_xml, config);
   std::filesystem::create_directories(s.out / "leg");
-  // The true surface on the footfall map's grid, rows flipped to restingDisk's (row 0 at the
-  // smallest y).
-  const perception::MapGrid grid = sc.footfall->map_view < 0 ? s.composite->grid() : s.views[0].locus->map.grid();
-  const perception::ElevationMap truth = s.truth->elevation(grid);
-  const Eigen::MatrixXf heights = truth.elevation().colwise().reverse();
+  // The true surface on the footfall map's grid (the footfall stage's), rows flipped to
+  // restingDisk's (row 0 at the smallest y).
+  const perception::MapGrid& grid = s.footfall_truth->grid();
+  const Eigen::MatrixXf heights = s.footfall_truth->elevation().colwise().reverse();
   const double x0 = grid.x_min + 0.5 * grid.cell, y0 = grid.y_max - (grid.rows - 0.5) * grid.cell;
   // The prediction for every candidate centre of the region: the tilt a rigid disk rests at on the
   // true surface (leg/predicted_tilt.tiff, NaN outside the region or where no rest exists).
@@ -50,8 +47,8 @@ void run(RunState& s) {
   for (std::size_t k = 0; k < s.choices.size(); ++k) {
     const FootfallChoice& c = s.choices[k];
     nlohmann::ordered_json j;
-    j["x_m"] = number(c.x_m);
-    j["y_m"] = number(c.y_m);
+    j["x_m"] = jsonNumber(c.x_m);
+    j["y_m"] = jsonNumber(c.y_m);
     if (!std::isfinite(c.x_m)) {
       for (const char* key : {"tilt_deg", "sink_m", "slip_m"}) j[key] = nullptr;
       j["settled"] = false;
@@ -65,7 +62,7 @@ void run(RunState& s) {
       j["slip_m"] = o.slip_m;
       j["settled"] = o.settled;
       j["contact_cap_reached"] = o.contact_cap_reached;
-      j["predicted_tilt_deg"] = rest ? number(rest->tilt_deg) : nlohmann::ordered_json(nullptr);
+      j["predicted_tilt_deg"] = rest ? jsonNumber(rest->tilt_deg) : nlohmann::ordered_json(nullptr);
       char predicted[32] = "-", line[220];
       if (rest) std::snprintf(predicted, sizeof predicted, "%.2f deg", rest->tilt_deg);
       std::snprintf(line, sizeof line, "leg       %-21s tilt %5.2f deg (rigid disk on the truth: %s), sink %.1f mm, slip %.1f mm%s%s",
