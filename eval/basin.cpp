@@ -14,13 +14,18 @@
 #include <map>
 #include <mutex>
 #include <numbers>
+#include <optional>
 #include <thread>
 #include <tuple>
 
+#include <nlohmann/json.hpp>
+
 #include "base/random.hpp"
 #include "eval/io.hpp"
+#include "eval/journal.hpp"
 #include "eval/match_figures.hpp"
 #include "eval/pair_registration.hpp"
+#include "eval/progress.hpp"
 #include "eval/stages.hpp"
 #include "eval/sweep_internal.hpp"
 
@@ -67,6 +72,38 @@ void validate(const Scenario& sc, const BasinOptions& opt) {
 
 // The rows of one draw: one per method, in the scenario's order.
 using Rows = std::vector<std::vector<std::string>>;
+
+// A draw's rows as the journal's payload (one line of JSON) and back.
+std::string rowsPayload(const Rows& rows) { return nlohmann::json(rows).dump(); }
+
+Rows rowsFromPayload(const std::string& payload, const fs::path& journal, std::size_t u, std::size_t methods) {
+  Rows rows;
+  try {
+    rows = nlohmann::json::parse(payload).get<Rows>();
+  } catch (const std::exception& e) {
+    throw JournalError(journal.string() + ": draw " + std::to_string(u) + ": its recorded rows are not readable (" +
+                       e.what() + "); run without --resume to start over");
+  }
+  if (rows.size() != methods || std::any_of(rows.begin(), rows.end(), [](const auto& r) { return r.size() != kHeader.size(); }))
+    throw JournalError(journal.string() + ": draw " + std::to_string(u) + ": recorded " + std::to_string(rows.size()) +
+                       " rows, the scenario has " + std::to_string(methods) +
+                       " methods; run without --resume to start over");
+  return rows;
+}
+
+// What the journal's records depend on: the scenario (its methods, terrain, sensor, seed), the
+// grid, the measured times and the split.
+std::string journalIdentity(const Scenario& sc, const BasinOptions& opt) {
+  std::string text = "basin\ntiming=" + std::string(opt.timing ? "1" : "0") + "\nshard=" +
+                     (opt.shard ? std::to_string(opt.shard->index) + "/" + std::to_string(opt.shard->count) : "") +
+                     "\ntranslation_m=";
+  for (const double t : opt.grid.translation_m) text += numberText(t) + ",";
+  text += "\nrotation_deg=";
+  for (const double r : opt.grid.rotation_deg) text += numberText(r) + ",";
+  text += "\ntrials=" + std::to_string(opt.grid.trials) + "\nvertical=" + (opt.grid.vertical_axis ? "1" : "0") +
+          "\n" + resolvedYaml(sc);
+  return identityDigest(text);
+}
 
 // The scenario as the basin builds its pair: no Cartesian baseline, no composite.
 Scenario pairScenario(const Scenario& sc) {
@@ -136,7 +173,15 @@ std::string summary(const Scenario& sc, const BasinOptions& opt, const Tally& t,
       std::snprintf(buf, sizeof buf, "%.1f mm |", 1000 * median(t.ok_err[m]));
       md += buf;
     }
-    for (const double b : boundary(g, methods[m].rate, 0.95)) md += std::isfinite(b) ? " " + numberText(b) + " m |" : " — |";
+    for (const double b : boundary(g, methods[m].rate, 0.95)) {
+      if (std::isfinite(b)) {
+        md += ' ';
+        md += numberText(b);
+        md += " m |";
+      } else {
+        md += " — |";
+      }
+    }
     md += "\n";
   }
   return md;
@@ -266,8 +311,30 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
                  : std::string()) +
       " x " + std::to_string(spec.methods.size()) + " methods -> " + opt.out.string());
 
-  // The pair: the ordinary stages, into out/pair/.
+  // The draws an earlier attempt registered (with --resume), then the journal open for this one's.
   fs::create_directories(opt.out);
+  const fs::path journal_file =
+      opt.out / (opt.shard ? sweep_detail::shardName(*opt.shard, "basin", ".journal") : "basin.journal");
+  Journal journal = openJournal(journal_file, journalIdentity(scenario, opt), drawCount(g), opt.resume);
+  std::vector<Rows> rows(todo.size());
+  std::vector<std::size_t> pending;  // indices into todo
+  for (std::size_t i = 0; i < todo.size(); ++i) {
+    const auto it = journal.done.records.find(todo[i]);
+    if (it == journal.done.records.end()) {
+      pending.push_back(i);
+    } else {
+      rows[i] = rowsFromPayload(it->second, journal_file, todo[i], spec.methods.size());
+    }
+  }
+  if (journal.done.records.size() != todo.size() - pending.size())
+    throw JournalError(journal_file.string() + ": records draws that are not in this " +
+                       (opt.shard ? "shard" : "basin") + "; run without --resume to start over");
+  if (opt.resume)
+    say("resuming: " + std::to_string(todo.size() - pending.size()) + " of " + std::to_string(todo.size()) +
+        " draws recorded in " + journal_file.string() +
+        (journal.done.torn_tail ? " (a draw cut short while being recorded is registered again)" : ""));
+
+  // The pair: the ordinary stages, into out/pair/.
   RunState s{sc, opt.out / "pair", opt.progress};
   fs::create_directories(s.out);
   for (const Stage& stage : {stages::world(), stages::scan(), stages::map()}) stage.run(s);
@@ -279,14 +346,17 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   const ViewState& vj = s.views[std::size_t(pj)];
   const PairRegistration pair(*vi.locus, vi.T_WS, *vj.locus, vj.T_WS, config, spec.methods);
 
-  std::vector<Rows> rows(todo.size());
-  std::mutex mutex;
+  std::mutex mutex;  // guards the progress, the journal and the failures
+  Progress progress("basin " + sc.name, todo.size(), todo.size() - pending.size(), Progress::modeFor(opt.progress),
+                    std::chrono::seconds(1));
+  progress.setLinePrefix("basin ");
   std::atomic<std::size_t> next{0};
-  std::size_t done = 0;
-  std::string first_failure;  // a registration that threw, reported once
-  auto last = std::chrono::steady_clock::now() - std::chrono::seconds(10);
+  std::atomic<bool> stop{false};
+  std::string first_failure;               // a registration that threw, reported once
+  std::optional<std::string> fatal;        // the journal could not be written
   const auto work = [&] {
-    for (std::size_t i; (i = next++) < todo.size();) {
+    for (std::size_t p; !stop && (p = next++) < pending.size();) {
+      const std::size_t i = pending[p];
       const Draw d = draw(g, todo[i]);
       const double t_m = g.translation_m[d.t], r_deg = g.rotation_deg[d.r];
       const Eigen::Isometry3d T_0 = pair.trueRelative() * basinError(sc.seed, d.trial, t_m, r_deg, vj.T_WS, g.vertical_axis);
@@ -311,22 +381,26 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
         rows[i].push_back(std::move(row));
       }
       const std::lock_guard lock(mutex);
-      ++done;
-      const auto now = std::chrono::steady_clock::now();
-      if (now - last >= std::chrono::seconds(1) || done == todo.size()) {
-        last = now;
-        say("basin [" + std::to_string(done) + "/" + std::to_string(todo.size()) + "] " + numberText(t_m) + " m " +
-            numberText(r_deg) + " deg trial " + std::to_string(d.trial) + ":" + verdicts);
+      try {
+        journal.writer->append(todo[i], rowsPayload(rows[i]));
+      } catch (const JournalError& e) {
+        stop = true;
+        if (!fatal) fatal = e.what();
+        return;
       }
+      progress.step(numberText(t_m) + " m " + numberText(r_deg) + " deg trial " + std::to_string(d.trial) + ":" +
+                    verdicts);
     }
   };
-  const std::size_t jobs = std::min<std::size_t>(std::size_t(opt.jobs), std::max<std::size_t>(1, todo.size()));
+  const std::size_t jobs = std::min<std::size_t>(std::size_t(opt.jobs), std::max<std::size_t>(1, pending.size()));
   if (jobs <= 1) {
     work();
   } else {
     std::vector<std::jthread> threads;
     for (std::size_t k = 0; k < jobs; ++k) threads.emplace_back(work);
   }
+  progress.finish();
+  if (fatal) throw JournalError(*fatal);
   if (!first_failure.empty()) say("basin: a method gave up (counted as a failure), e.g. " + first_failure);
 
   // Rows by method (the scenario's order), then draw.

@@ -41,7 +41,8 @@ struct BasinOptions {
   std::optional<Shard> shard;  // absent: every draw, into out/basin.csv with the figures
   int jobs = 1;                // draws registered at once (each registration already uses every core)
   bool timing = false;         // fill time_s (rows then differ from run to run); empty otherwise
-  bool progress = true;        // progress lines on stderr
+  bool progress = true;        // a progress bar on a terminal, progress lines otherwise
+  bool resume = false;         // keep the draws the journal records as finished; register only the rest
 };
 
 // The initial error of trial `trial` at magnitudes (t, r): E = (R, t·h) in sensor J's frame, h

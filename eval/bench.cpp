@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "eval/io.hpp"
+#include "eval/progress.hpp"
 #include "eval/pair_registration.hpp"
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
@@ -80,6 +81,7 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
   const sim::RayScene scene(bw->world);
   const Eigen::Isometry3d T = perception::sensorPose({0, -6, 3}, {0, -30.0 * std::numbers::pi / 180, 0});
   const int reps = opt.repetitions;
+  Progress progress("bench scan", 4, 0, Progress::modeFor(opt.progress));
 
   // 1. 64×256, one thread: the emulator (ERIM defaults, one ray per pixel) vs a plain mj_ray loop.
   perception::SensorModel small;  // the ERIM's defaults
@@ -91,10 +93,12 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
     sim::Scan out;  // reused, as a sweep would
     emu_s = timeMedian(reps, [&] { scanner_small.scan(T, 1, out); });
+    progress.step("emulator 64x256, 1 thread");
     perception::SensorModel mixed = small;
     mixed.mixed_pixels = true;
     const sim::ErimScanner scanner_mixed(scene, mixed);
     emu_mixed_s = timeMedian(reps, [&] { scanner_mixed.scan(T, 1, out); });
+    progress.step("emulator 64x256, mixed pixels");
     // mj_ray walks every cell of the hfield the ray's bounding box covers, so a full 64×256 loop
     // takes long: time every `stride`-th pixel of the same scan (the same mix of rays).
     const auto img = perception::RangeImage::blank(small.rows, small.cols, small.fov_v_rad, small.fov_h_rad);
@@ -106,6 +110,7 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
         bw->world.ray(T.translation(), T.linear() * perception::beamDirection(img.phi[r], img.theta[c]));
       }
     });
+    progress.step("mj_ray loop 64x256");
   }
   const double rays_small = double(small.rows) * small.cols;
   const double emu_mrays = rays_small / emu_s / 1e6, mj_mrays = mj_rays / mj_s / 1e6;
@@ -130,6 +135,8 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
     emu_large_s.push_back(std::chrono::duration<double>(t1 - t0).count());
     bare_s.push_back(std::chrono::duration<double>(t2 - t1).count());
   }
+  progress.step("emulator and bare Embree 1024x4096");
+  progress.finish();
   const double rays_large = double(large.rows) * large.cols;
   const double large_mrays = rays_large / median(emu_large_s) / 1e6;
   const double bare_mrays = rays_large / median(bare_s) / 1e6;
@@ -185,6 +192,7 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
               opt.repetitions, isa_name);
   std::printf("  %-8s %10s %14s %14s %10s %16s %16s %14s %8s\n", "cell", "cells", "locus 1t ns", "locus all ns",
               "speedup", "cartesian 1t ns", "scalar 1t ns", "AVX2 1t ns", "lanes");
+  Progress progress("bench map", 5, 0, Progress::modeFor(opt.progress));
   for (double cell : {0.02, 0.05, 0.10, 0.20}) {
     MapSpec spec = region;
     spec.cell_m = cell;
@@ -239,8 +247,12 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
     lanes[key] = double(lane_cells) / cells;
     char avx2_text[32] = "-";  // measured where the CPU has AVX-512 (capped to AVX2)
     if (t2 > 0) std::snprintf(avx2_text, sizeof avx2_text, "%.1f", t2 / cells * 1e9);
-    std::printf("  %-8.2f %10.0f %14.1f %14.1f %9.2fx %16.1f %16.1f %14s %7.0f%%\n", cell, cells, t1 / cells * 1e9,
-                ta / cells * 1e9, sp, tc / cells * 1e9, ts / cells * 1e9, avx2_text, 100.0 * lane_cells / cells);
+    char row[256];
+    std::snprintf(row, sizeof row, "  %-8.2f %10.0f %14.1f %14.1f %9.2fx %16.1f %16.1f %14s %7.0f%%\n", cell, cells,
+                  t1 / cells * 1e9, ta / cells * 1e9, sp, tc / cells * 1e9, ts / cells * 1e9, avx2_text,
+                  100.0 * lane_cells / cells);
+    progress.step(std::string("map at ") + key + " m");
+    progress.print(stdout, row);
   }
   // Per image: the mapper's tables (returns, edge pixels and σ inputs per 2×2 cell), one thread.
   double setup_s = 0, edges_s = 0;
@@ -249,6 +261,8 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
     edges_s = timeMedian(opt.repetitions, [&] { perception::detectRangeEdges(image, gnc); });
     setup_s = timeMedian(opt.repetitions, [&] { perception::LocusMapper(image, &edges, locus); });
   }
+  progress.step("edge detection and mapper tables");
+  progress.finish();
   std::printf("  per image, 1 thread: edge detection (GNC) %.2f ms, locus mapper tables %.2f ms\n", edges_s * 1e3,
               setup_s * 1e3);
   j["ns_per_cell_1t"] = one;
@@ -299,6 +313,7 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
   std::printf("ambler bench match (%s, views %d-%d, %dx%d cells of %.2f m; medians of %d)\n", sc.name.c_str(), i, j,
               grid.rows, grid.cols, grid.cell, opt.repetitions);
   std::printf("  %-15s %10s %12s %12s %14s %12s\n", "method", "iterations", "1 thread ms", "all ms", "error m", "error deg");
+  Progress progress("bench match", sc.matching->methods.size(), 0, Progress::modeFor(opt.progress));
   for (const MatchMethod m : sc.matching->methods) {
     PairResult res;
     const auto once = [&] { res = pair.run(m, T_0); };
@@ -309,8 +324,11 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
     }
     const double all = timeMedian(opt.repetitions, once);
     const perception::PoseError err = res.error;
-    std::printf("  %-15s %10d %12.1f %12.1f %14.4f %12.3f\n", matchMethodName(m), res.reg.iterations, one * 1e3, all * 1e3,
-                err.translation_m, err.rotation_deg);
+    char row[256];
+    std::snprintf(row, sizeof row, "  %-15s %10d %12.1f %12.1f %14.4f %12.3f\n", matchMethodName(m), res.reg.iterations,
+                  one * 1e3, all * 1e3, err.translation_m, err.rotation_deg);
+    progress.step(matchMethodName(m));
+    progress.print(stdout, row);
     nlohmann::ordered_json e;
     e["method"] = matchMethodName(m);
     e["iterations"] = res.reg.iterations;
@@ -335,6 +353,7 @@ nlohmann::ordered_json benchFootfall(const BenchOptions& opt) {
   std::printf("ambler bench footfall (10 000 candidates, 30 cm foot, all six methods; medians of %d)\n",
               opt.repetitions);
   std::printf("  %-8s %12s %14s %14s %9s\n", "cell m", "disk cells", "1 thread ms", "all cores ms", "speed-up");
+  Progress progress("bench footfall", 2, 0, Progress::modeFor(opt.progress));
   for (const double cell : {0.10, 0.02}) {
     // Fractal ground at the map's resolution, 100 candidate cells and the foot's margin a side.
     terrains::TerrainSpec spec;
@@ -363,7 +382,12 @@ nlohmann::ordered_json benchFootfall(const BenchOptions& opt) {
     const double rad = 0.15 / cell;
     for (int dr = -int(rad) - 1; dr <= int(rad) + 1; ++dr)
       for (int dc = -int(rad) - 1; dc <= int(rad) + 1; ++dc) disk += dr * dr + dc * dc <= rad * rad + 1e-9;
-    std::printf("  %-8.2f %12ld %14.2f %14.2f %8.2fx\n", cell, disk, one * 1e3, all * 1e3, one / all);
+    char row[160];
+    std::snprintf(row, sizeof row, "  %-8.2f %12ld %14.2f %14.2f %8.2fx\n", cell, disk, one * 1e3, all * 1e3, one / all);
+    char label[40];
+    std::snprintf(label, sizeof label, "footfalls at %.2f m", cell);
+    progress.step(label);
+    progress.print(stdout, row);
     nlohmann::ordered_json e;
     e["cell_m"] = cell;
     e["candidates"] = 10000;

@@ -10,6 +10,7 @@ namespace ambler::eval {
 struct BenchOptions {
   int repetitions = 5;
   std::filesystem::path json;  // empty: no file
+  bool progress = true;        // a bar on a terminal, a line per measurement otherwise (stderr)
 };
 
 // The scanner benchmark (docs/benchmarks.md): emulator vs a single-thread mj_ray loop on a 64×256

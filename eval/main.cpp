@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
 
   std::string sweep_file, sweep_out, sweep_shard, sweep_keep = "metrics";
   int sweep_jobs = 1;
-  bool sweep_merge = false, sweep_timing = false, sweep_quiet = false;
+  bool sweep_merge = false, sweep_timing = false, sweep_quiet = false, sweep_resume = false;
   auto* sweep = app.add_subcommand("sweep", "Run the cartesian product of a sweep's axes over a base scenario; "
                                             "one row per run in DIR/results.csv (see docs/sweeps.md).");
   sweep->add_option("sweep", sweep_file, "Sweep YAML (see docs/sweeps.md)")->required();
@@ -44,6 +44,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep->add_flag("--timing", sweep_timing, "Also the timing_s.* columns (rows then differ from run to run)");
   sweep->add_flag("--quiet,-q", sweep_quiet, "No progress lines on stderr");
+  sweep->add_flag("--resume", sweep_resume, "Keep the runs DIR's journal records as finished (a sweep killed "
+                                            "before it ended); run only the rest");
 
   std::string basin_file, basin_out, basin_shard, basin_t, basin_r;
   BasinOptions basin_opt;
@@ -70,6 +72,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   basin->add_flag("--timing", basin_opt.timing, "Fill the time_s column (rows then differ from run to run)");
   basin->add_flag("--quiet,-q", basin_quiet, "No progress lines on stderr");
+  basin->add_flag("--resume", basin_opt.resume, "Keep the draws DIR's journal records as finished (a basin "
+                                                "killed before it ended); register only the rest");
 
   auto* bench = app.add_subcommand("bench", "Measure speed; prints a table of medians.");
   bench->require_subcommand(1);
@@ -78,6 +82,7 @@ int main(int argc, char** argv) {
     CLI::App* b = bench->add_subcommand(name, what);
     b->add_option("--json", json, "Also write the figures to this JSON file");
     b->add_option("--reps", opt.repetitions, "Repetitions per measurement (median reported)")->check(CLI::Range(1, 1000));
+    b->add_flag_callback("--quiet,-q", [&opt] { opt.progress = false; }, "No progress on stderr");
     return b;
   };
   BenchOptions bench_opt;
@@ -150,12 +155,13 @@ int main(int argc, char** argv) {
       const Scenario sc = loadScenario(scenario_file);
       runScenario(sc, RunOptions{out_dir, !quiet});
     } else if (*sweep) {
-      SweepOptions opt{sweep_out, std::nullopt, sweep_jobs, parseKeep(sweep_keep), sweep_timing, !sweep_quiet};
+      SweepOptions opt{sweep_out, std::nullopt, sweep_jobs, parseKeep(sweep_keep), sweep_timing, !sweep_quiet,
+                       sweep_resume};
       if (shard_opt->count()) opt.shard = parseShard(sweep_shard);
       if (opt.jobs < 1) throw SweepError("--jobs: expected an integer >= 1, got " + std::to_string(opt.jobs));
-      if (sweep_merge && (opt.shard || sweep_timing)) {
+      if (sweep_merge && (opt.shard || sweep_timing || sweep_resume)) {
         throw SweepError(std::string("--merge: merges the shards' files; ") +
-                         (opt.shard ? "--shard" : "--timing") + " does not apply");
+                         (opt.shard ? "--shard" : sweep_timing ? "--timing" : "--resume") + " does not apply");
       }
       const Sweep sw = loadSweep(sweep_file);
       if (sweep_merge)
@@ -171,9 +177,10 @@ int main(int argc, char** argv) {
       if (basin_axis != "random" && basin_axis != "vertical")
         throw BasinError("--rotation-axis: expected random or vertical, got " + yamlQuoted(basin_axis));
       basin_opt.grid.vertical_axis = basin_axis == "vertical";
-      if (basin_merge && (basin_opt.shard || basin_opt.timing))
+      if (basin_merge && (basin_opt.shard || basin_opt.timing || basin_opt.resume))
         throw BasinError(std::string("--merge: merges the shards' files; ") +
-                         (basin_opt.shard ? "--shard" : "--timing") + " does not apply");
+                         (basin_opt.shard ? "--shard" : basin_opt.timing ? "--timing" : "--resume") +
+                         " does not apply");
       const Scenario sc = loadScenario(basin_file);
       if (basin_merge)
         mergeBasin(sc, basin_opt);

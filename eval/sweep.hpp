@@ -58,7 +58,8 @@ struct SweepOptions {
   int jobs = 1;                // scenarios run at once (each already uses every core)
   Keep keep = Keep::Metrics;
   bool timing = false;   // also the timing_s.* columns (then rows are not reproducible)
-  bool progress = true;  // one line per run on stderr
+  bool progress = true;  // a progress bar on a terminal, one line per run otherwise
+  bool resume = false;   // keep the runs the journal records as finished; run only the rest
 };
 
 // "K/N" with 1 <= K <= N. Throws SweepError naming --shard.
@@ -67,8 +68,10 @@ Shard parseShard(const std::string& text);
 Keep parseKeep(const std::string& text);
 
 // Runs the sweep (or its shard) into out/runs/<k>/ and writes out/results.csv (or
-// out/results.shard-K-of-N.csv); returns the CSV's path. Throws SweepError for a bad option or a
-// failed run (no CSV is written then).
+// out/results.shard-K-of-N.csv); returns the CSV's path. Each finished run's row is first recorded
+// in out/results.journal (results.shard-K-of-N.journal), so `resume` after a kill runs only the
+// runs not recorded (docs/sweeps.md, "Resuming"). Throws SweepError for a bad option or a failed
+// run (no CSV is written then), JournalError for a journal that cannot be read or written.
 std::filesystem::path runSweep(const Sweep& sweep, const SweepOptions& options);
 
 // Merges out/results.shard-*-of-N.csv into out/results.csv, rows by run index; returns its path.

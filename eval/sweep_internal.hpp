@@ -29,8 +29,9 @@ std::string numberText(double v);
 std::string csvLine(const std::vector<std::string>& cells);
 // The run index and the axis cells of run k: the first columns of its row.
 std::vector<std::string> axisCells(const Sweep& sweep, std::size_t k);
-// <stem>.shard-K-of-N.csv (stem "results" for a sweep, "basin" for a basin)
-std::string shardName(const Shard& s, const std::string& stem = "results");
+// <stem>.shard-K-of-N<ext> (stem "results" for a sweep, "basin" for a basin; ext ".csv" for the
+// shard's CSV, ".journal" for its resume journal)
+std::string shardName(const Shard& s, const std::string& stem = "results", const std::string& ext = ".csv");
 // The <stem>.shard-K-of-N.csv files in `out`, ordered by K: all N of one split. Throws SweepError
 // naming the directory or the file when there are none, a split is mixed or a shard is missing.
 std::vector<std::pair<Shard, std::filesystem::path>> shardFiles(const std::filesystem::path& out,

@@ -97,8 +97,8 @@ std::vector<std::string> axisCells(const Sweep& sweep, std::size_t k) {
   return cells;
 }
 
-std::string shardName(const Shard& s, const std::string& stem) {
-  return stem + ".shard-" + std::to_string(s.index) + "-of-" + std::to_string(s.count) + ".csv";
+std::string shardName(const Shard& s, const std::string& stem, const std::string& ext) {
+  return stem + ".shard-" + std::to_string(s.index) + "-of-" + std::to_string(s.count) + ext;
 }
 
 std::vector<std::pair<Shard, fs::path>> shardFiles(const fs::path& out, const std::string& stem) {

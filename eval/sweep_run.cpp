@@ -18,6 +18,8 @@
 #include <utility>
 
 #include "eval/io.hpp"
+#include "eval/journal.hpp"
+#include "eval/progress.hpp"
 #include "eval/runner.hpp"
 #include "eval/sweep_internal.hpp"
 
@@ -125,6 +127,41 @@ std::string progressLine(const Sweep& sweep, std::size_t k, const nlohmann::orde
   return line;
 }
 
+// A row as the journal's payload (one line of JSON: [[column, cell], ...]) and back.
+std::string rowPayload(const Row& row) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& [name, cell] : row) j.push_back({name, cell});
+  return j.dump();
+}
+
+Row rowFromPayload(const std::string& payload, const fs::path& journal, std::size_t k) {
+  Row row;
+  try {
+    const auto j = nlohmann::json::parse(payload);
+    if (!j.is_array()) throw std::invalid_argument("not a list");
+    for (const auto& cell : j) {
+      if (!cell.is_array() || cell.size() != 2 || !cell[0].is_string() || !cell[1].is_string())
+        throw std::invalid_argument("not a [column, cell] pair");
+      row.emplace_back(cell[0].get<std::string>(), cell[1].get<std::string>());
+    }
+  } catch (const std::exception& e) {
+    throw JournalError(journal.string() + ": run " + std::to_string(k) + ": its recorded row is not readable (" +
+                       e.what() + "); run without --resume to start over");
+  }
+  return row;
+}
+
+// What the journal's records depend on: every run's resolved scenario, the metric columns, the
+// measured times and the split. A journal with another identity is refused at --resume.
+std::string journalIdentity(const Sweep& sweep, const SweepOptions& opt, const std::vector<std::size_t>& todo) {
+  std::string text = "sweep\ntiming=" + std::string(opt.timing ? "1" : "0") + "\nshard=" +
+                     (opt.shard ? std::to_string(opt.shard->index) + "/" + std::to_string(opt.shard->count) : "") +
+                     "\nmetrics=";
+  for (const auto& m : sweep.metrics) text += m + ",";
+  for (const std::size_t k : todo) text += "\nrun " + std::to_string(k) + "\n" + resolvedYaml(sweep.runs[k]);
+  return identityDigest(text);
+}
+
 }  // namespace
 
 std::string sweep_detail::numberText(double v) {
@@ -174,9 +211,10 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
       todo.push_back(k);
   }
   const fs::path csv = opt.out / (opt.shard ? shardName(*opt.shard) : "results.csv");
+  const fs::path journal_file = opt.out / (opt.shard ? shardName(*opt.shard, "results", ".journal") : "results.journal");
   const std::size_t jobs = std::min<std::size_t>(std::size_t(opt.jobs), todo.size());
 
-  std::mutex mutex;  // guards stderr, `done` and the first error
+  const auto mode = Progress::modeFor(opt.progress);
   const auto say = [&](const std::string& line) {
     if (opt.progress) std::fprintf(stderr, "ambler: %s\n", line.c_str());
   };
@@ -187,24 +225,49 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
       ", " + std::to_string(jobs) + (jobs == 1 ? " job" : " jobs") + " -> " + opt.out.string());
   fs::create_directories(opt.out / "runs");
 
+  // The runs an earlier attempt finished (with --resume), then the journal open for this one's.
+  Journal journal = openJournal(journal_file, journalIdentity(sweep, opt, todo), total, opt.resume);
   std::vector<Row> rows(todo.size());
+  std::vector<std::size_t> pending;  // indices into todo
+  for (std::size_t i = 0; i < todo.size(); ++i) {
+    const auto it = journal.done.records.find(todo[i]);
+    if (it == journal.done.records.end()) {
+      pending.push_back(i);
+    } else {
+      rows[i] = rowFromPayload(it->second, journal_file, todo[i]);
+    }
+  }
+  if (journal.done.records.size() != todo.size() - pending.size())
+    throw JournalError(journal_file.string() + ": records runs that are not in this " +
+                       (opt.shard ? "shard" : "sweep") + "; run without --resume to start over");
+  if (opt.resume)
+    say("resuming: " + std::to_string(todo.size() - pending.size()) + " of " + std::to_string(todo.size()) +
+        " runs recorded in " + journal_file.string() +
+        (journal.done.torn_tail ? " (a run cut short while being recorded is run again)" : ""));
+
+  std::mutex mutex;  // guards the progress, the journal and the first error
+  Progress progress("sweep " + sweep.name, todo.size(), todo.size() - pending.size(), mode);
   std::atomic<std::size_t> next{0};
   std::atomic<bool> stop{false};
-  std::size_t done = 0;
   std::optional<std::pair<std::size_t, std::string>> error;  // the failed run of lowest index
+  std::optional<std::string> journal_error;                   // the journal could not be written
   const auto work = [&] {
-    for (std::size_t i; !stop && (i = next++) < todo.size();) {
+    for (std::size_t p; !stop && (p = next++) < pending.size();) {
+      const std::size_t i = pending[p];
       const std::size_t k = todo[i];
       try {
         const fs::path dir = opt.out / "runs" / std::to_string(k);
-        fs::remove_all(dir);  // no files of an earlier sweep left beside this run's
+        fs::remove_all(dir);  // no files of an earlier sweep (or a killed attempt) left beside this run's
         const auto metrics = runScenario(sweep.runs[k], RunOptions{dir, false});
         flatten(metrics, "", opt.timing, rows[i]);
         prune(dir, opt.keep);
         const std::lock_guard lock(mutex);
-        ++done;
-        say("[" + std::to_string(done) + "/" + std::to_string(todo.size()) + "] " +
-            progressLine(sweep, k, metrics));
+        journal.writer->append(k, rowPayload(rows[i]));
+        progress.step(progressLine(sweep, k, metrics));
+      } catch (const JournalError& e) {
+        stop = true;
+        const std::lock_guard lock(mutex);
+        if (!journal_error) journal_error = e.what();
       } catch (const std::exception& e) {
         stop = true;
         const std::lock_guard lock(mutex);
@@ -218,6 +281,8 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
     std::vector<std::jthread> threads;
     for (std::size_t j = 0; j < jobs; ++j) threads.emplace_back(work);
   }
+  progress.finish();
+  if (journal_error) throw JournalError(*journal_error);
   if (error) {
     std::string values;
     const auto combination = sweep.combination(error->first);
