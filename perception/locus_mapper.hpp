@@ -25,6 +25,11 @@ struct LocusConfig {
   double z_margin_m = 0.3;    // lines are searched within the returns' bounds ± this margin (docs/locus.md)
   bool roughness = true;      // σ includes the surface's roughness between pixels (docs/locus.md)
   double roughness_hurst = 0.7;  // H of the fBm assumed between pixels (0.5: Brownian)
+  // σ also includes the footprint's averaging of the rough surface (with sensor.mixed_pixels and
+  // roughness; docs/locus.md, "The footprint"). Off for single maps: feature detection reads σ as
+  // the noise of its curvature fits, and this error is a smooth bias that every view of a cell
+  // shares, which only the composite must not average away (docs/composite.md); the merge turns it on.
+  bool footprint_sigma = false;
   bool vectorized = true;  // maps: the common case in SIMD lanes (8 AVX-512 or 2 × 4 AVX2) where
                            // the CPU has them (the same bits as the scalar search; false: scalar)
 };
@@ -216,7 +221,7 @@ class LocusMapper {
   Eigen::Vector3d trans_SW_;  // and translation
   Eigen::Vector3d up_;  // world z in the sensor frame
   int rows_, cols_;
-  std::vector<double> roughness_g_;  // the fBm interpolation factor, tabulated over f
+  std::vector<double> roughness_g_;  // the fBm interpolation factor over f: across scanlines, then along
   double phi0_, dphi_, theta0_, dtheta_;
   double inv_dtheta_, inv_dphi_;
   double quantization_var_;  // config_.sensor.quantizationVariance(), for the lanes

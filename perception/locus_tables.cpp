@@ -139,12 +139,26 @@ LocusMapper::LocusMapper(const RangeImage& image, const Raster<std::uint8_t>* ed
   trans_SW_ = T_SW.translation();
   // World z in the sensor frame, summed as lineOf sums R·v (lineOf returns it for vertical lines).
   for (int i = 0; i < 3; ++i) up_[i] = (rot_SW_(i, 0) * 0.0 + rot_SW_(i, 1) * 0.0) + rot_SW_(i, 2) * 1.0;
-  // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1]; g is smooth).
+  // g(f)/(4 − 2^2H) of the fBm roughness term, tabulated (f in [0, 1]; g is smooth): one table
+  // across scanlines, one along them. They differ by the footprint's term alone (docs/locus.md,
+  // "The footprint"): with mixed pixels the sensor reports the mean range over its footprint, a
+  // disk of radius a = divergence/2 sampled at its centre (weight 1/4) and six points on a ring of
+  // radius b = √(2/3)·a (1/8 each). On fBm with structure function S(δ) = C·δ^2H that mean departs
+  // from the centre's range with variance K·S(b), K = (36 − 3·(2 + 2·3^H + 2^2H))/64 (0.143 at
+  // H = 0.7). C comes from each direction's D² as for the interpolation (E[D²] = C·h^2H·(4 − 2^2H),
+  // h the pixel spacing), half the footprint's term from each direction.
   const double h2 = 2 * config.roughness_hurst;
-  for (int i = 0; i <= kRoughnessSteps; ++i) {
-    const double f = double(i) / kRoughnessSteps;
-    roughness_g_.push_back((std::pow(f, h2) * (1 - f) + std::pow(1 - f, h2) * f - f * (1 - f)) /
-                           (4 - std::pow(2.0, h2)));
+  const double K = (36 - 3 * (2 + 2 * std::pow(3.0, config.roughness_hurst) + std::pow(2.0, h2))) / 64;
+  const double b = std::sqrt(2.0 / 3.0) * 0.5 * config.sensor.beamDivergence();
+  for (int dir = 0; dir < 2; ++dir) {
+    const double spacing = dir == 0 ? dphi_ : dtheta_;
+    const double footprint =
+        config.footprint_sigma && config.sensor.mixed_pixels ? 0.5 * K * std::pow(b / spacing, h2) : 0.0;
+    for (int i = 0; i <= kRoughnessSteps; ++i) {
+      const double f = double(i) / kRoughnessSteps;
+      roughness_g_.push_back((std::pow(f, h2) * (1 - f) + std::pow(1 - f, h2) * f - f * (1 - f) + footprint) /
+                             (4 - std::pow(2.0, h2)));
+    }
   }
   for (double phi : image.phi) {
     sin_phi_.push_back(std::sin(phi));
@@ -250,7 +264,7 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   const double var_pixel = config_.sensor.rangeVariance(rho);
   const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
   const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
-                       roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data());
+                       roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data() + kRoughnessSteps + 1);
   const double var_rho = var_pixel * sum_w2 + rough;
   const Eigen::Vector3d& n = cs.normal;
   const double pn = (p.x() * n.x() + p.y() * n.y()) + p.z() * n.z(), bn = (b.x() * n.x() + b.y() * n.y()) + b.z() * n.z();

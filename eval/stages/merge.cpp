@@ -59,7 +59,8 @@ void run(RunState& s) {
   } else {
     for (std::size_t k = 0; k < s.views.size(); ++k) placements[k] = {true, s.views[k].T_WS, {}};
   }
-  const perception::LocusConfig locus = locusConfig(sc);
+  perception::LocusConfig locus = locusConfig(sc);
+  locus.footprint_sigma = true;  // the footprint's error is shared by every view (docs/composite.md)
   // σ without the terrain's part (docs/locus.md, σ_rough): what is left is the part every view
   // of a cell shares (docs/composite.md).
   perception::LocusConfig noise_only = locus;

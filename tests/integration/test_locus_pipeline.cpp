@@ -198,7 +198,9 @@ TEST(LocusPipeline, LanesGiveTheScalarSearchsBits) {
     perception::RangeImage image = scan.image;
     perception::unwrapRanges(image, sensor);
     const perception::Raster<std::uint8_t> edges = perception::detectRangeEdges(image);
-    perception::LocusConfig lanes = spec.scanToMapConfig().locus, scalar = lanes;
+    perception::LocusConfig lanes = spec.scanToMapConfig().locus;
+    lanes.footprint_sigma = rpy.x() != 0;  // the composite's σ (its own table along scanlines) in one pose
+    perception::LocusConfig scalar = lanes;
     scalar.vectorized = false;
     const perception::LocusMapper fast(image, &edges, lanes), slow(image, &edges, scalar);
     for (const auto isa : {perception::LaneIsa::Avx512, perception::LaneIsa::Avx2}) {
