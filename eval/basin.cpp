@@ -266,10 +266,9 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
                  : std::string()) +
       " x " + std::to_string(spec.methods.size()) + " methods -> " + opt.out.string());
 
-  // The pair: the ordinary stages, into out/pair/.
-  fs::create_directories(opt.out);
+  // The pair: the ordinary stages, into out/pair/ (the world stage makes the directories once
+  // the views are checked against the terrain).
   RunState s{sc, opt.out / "pair", opt.progress};
-  fs::create_directories(s.out);
   for (const Stage& stage : {stages::world(), stages::scan(), stages::map()}) stage.run(s);
   perception::RegistrationConfig config = registrationConfig(sc);
   // The rover's prior covers every error the grid tries.

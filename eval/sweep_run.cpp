@@ -185,7 +185,7 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
            ? " (shard " + std::to_string(opt.shard->index) + " of " + std::to_string(opt.shard->count) + ")"
            : "") +
       ", " + std::to_string(jobs) + (jobs == 1 ? " job" : " jobs") + " -> " + opt.out.string());
-  fs::create_directories(opt.out / "runs");
+  createOutDir(opt.out / "runs");
 
   std::vector<Row> rows(todo.size());
   std::atomic<std::size_t> next{0};
