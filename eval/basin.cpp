@@ -361,7 +361,7 @@ fs::path mergeBasin(const Scenario& scenario, const BasinOptions& opt) {
       throw BasinError(path.string() + ": not a basin CSV (expected the header " + csvLine(kHeader).substr(0, 40) + "...)");
     for (std::size_t k = 1; k < records->size(); ++k) {
       const auto& row = (*records)[k];
-      const std::string where = path.string() + ": row " + std::to_string(k);
+      const std::string where = path.string() + ": row " + std::to_string(k + 1);  // the header is row 1, as in sweeps
       if (row.size() != kHeader.size()) throw BasinError(where + ": expected " + std::to_string(kHeader.size()) + " cells");
       const auto m = method_index.find(row[0]);
       const auto t = t_index.find(row[1]);

@@ -142,6 +142,19 @@ int main(int argc, char** argv) {
                      "Run nothing: report DIR/basin/results.csv as it is (e.g. merged from shards)");
   matching->add_flag("--quiet,-q", match_quiet, "No progress lines on stderr");
 
+  // CLI11 would say "A subcommand is required" for a mistyped command.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known = known || sub->get_name() == argv[1];
+    }
+    if (!known) {
+      std::fprintf(stderr, "ambler: error: %s: unknown command (expected one of %s; see --help)\n", argv[1], names.c_str());
+      return 1;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -11,6 +11,7 @@ logs=$(mktemp -d)
 trap 'chmod -R u+w "$tmp" 2>/dev/null; rm -rf "$tmp" "$logs"' EXIT
 cd "$tmp" || exit 1
 fail=0
+wrap=()  # a command that runs ambler (below: in a mount namespace with a read-only directory)
 
 # The scratch directory's files and their contents, to see that a refused command wrote nothing.
 snapshot() { find . -printf '%p %y %s %T@\n' | sort; }
@@ -20,7 +21,7 @@ expect_error() {
   local name=$1 pattern=$2; shift 2
   local before
   before=$(snapshot)
-  "$ambler" "$@" >"$logs/out" 2>"$logs/err"
+  "${wrap[@]}" "$ambler" "$@" >"$logs/out" 2>"$logs/err"
   local rc=$?
   check "$name" "$pattern" "$rc" || return
   if [[ $(snapshot) != "$before" ]]; then
@@ -184,9 +185,9 @@ expect_error_after_start sweep_run_refused 'runfail\.yaml: run 1 \(views\.0\.xyz
 
 # ---- Command-line options
 sweep ok.yaml 'axes: {seed: [1, 2]}\n'
-expect_error unknown_option 'The following argument was not expected: --colour' run base.yaml --out out --colour red
+expect_error unknown_option 'The following argument was not expected: --colour' run base.yaml --out out --colour
 expect_error missing_required_option '--out is required' run base.yaml
-expect_error unknown_command 'The following argument was not expected: walk' walk base.yaml
+expect_error unknown_command 'walk: unknown command \(expected one of run, sweep, basin, bench, experiment; see --help\)' walk base.yaml
 expect_error shard_malformed '--shard: expected K/N with 1 <= K <= N \(shard K of N, 1-based\), got "3/2"' sweep ok.yaml --out out --shard 3/2
 expect_error shard_too_many '--shard: 3/3: the sweep has 2 runs, so at most 2 shards' sweep ok.yaml --out out --shard 3/3
 expect_error keep_unknown '--keep: expected one of none, metrics, all, got "some"' sweep ok.yaml --out out --keep some
@@ -215,6 +216,18 @@ expect_error out_under_a_file_basin '--out afile/basin: cannot create the direct
 expect_error out_is_a_file '--out afile: expected a directory, got a file' run base.yaml --out afile
 expect_error out_cannot_be_created '/proc/ambler_out: cannot create the directory \(No such file or directory\)' run base.yaml --out /proc/ambler_out --quiet
 
+# A read-only file system (a tmpfs mounted read-only on ro/ in a private mount namespace; root's
+# permission bits stop nothing, a read-only mount stops root too).
+mkdir ro
+if unshare -m sh -c 'mount -t tmpfs -o ro tmpfs ro' 2>/dev/null; then
+  wrap=(unshare -m sh -c 'mount -t tmpfs -o ro tmpfs ro && exec "$@"' sh)
+  expect_error out_read_only_parent '--out ro/run: cannot create the directory in ro \(Read-only file system\)' run base.yaml --out ro/run
+  expect_error out_read_only_directory '--out ro: cannot write in the directory \(Read-only file system\)' sweep ok.yaml --out ro --merge
+  wrap=()
+else
+  echo "skip out_read_only_parent, out_read_only_directory: cannot mount a read-only tmpfs here (not root?)"
+fi
+
 # ---- Merging shards (hand-made shard files: the merge reads them, runs nothing)
 mkdir noshards split missing
 expect_error merge_no_such_directory 'nodir: no such directory' sweep ok.yaml --out nodir --merge
@@ -233,6 +246,8 @@ mkdir quote && printf 'run,seed\n0,"1\n' >quote/results.shard-1-of-1.csv
 expect_error merge_not_a_csv 'quote/results\.shard-1-of-1\.csv: not a CSV file \(an open or stray quote\)' sweep ok.yaml --out quote --merge
 mkdir short && printf 'run,seed\n0,1\n' >short/results.shard-1-of-1.csv
 expect_error merge_run_missing 'short: run 1 is missing' sweep ok.yaml --out short --merge
+mkdir twice && printf 'run,seed\n0,1\n1,2\n0,1\n' >twice/results.shard-1-of-1.csv
+expect_error merge_run_duplicated 'twice/results\.shard-1-of-1\.csv: row 4: run 0 is duplicated' sweep ok.yaml --out twice --merge
 mkdir offgrid && printf 'method,translation_m,rotation_deg,trial,translation_error_m,rotation_error_deg,success,iterations,time_s\niconic_lm,0.7,0,0,0,0,true,1,\n' >offgrid/basin.shard-1-of-1.csv
 expect_error basin_merge_row_off_the_grid 'offgrid/basin\.shard-1-of-1\.csv: row 2: translation 0\.7 m is not on --translation-m' basin basin.yaml --out offgrid --merge --translation-m 0,0.5 --rotation-deg 0 --trials 1
 

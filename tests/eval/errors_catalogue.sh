@@ -17,8 +17,11 @@ fail=0
 if ! bash "$root/tests/eval/cli_errors.sh" "$ambler" >"$log" 2>&1; then
   echo "FAIL: cli_errors.sh fails:"; grep -v '^ok ' "$log"; exit 1
 fi
-declare -A printed
+declare -A printed skipped
 while IFS= read -r line; do
+  if [[ $line =~ ^skip\ ([a-z0-9_, ]+): ]]; then  # a case this machine cannot run (a mount, as root)
+    for name in ${BASH_REMATCH[1]//,/ }; do skipped[$name]=1; done
+  fi
   [[ $line =~ ^ok\ +([a-z0-9_]+):\ ambler:\ error:\ (.*)$ ]] || continue
   printed[${BASH_REMATCH[1]}]=${BASH_REMATCH[2]}
 done <"$log"
@@ -38,7 +41,9 @@ while IFS= read -r line; do
     file=${ref%%:*} name=${ref#*:}
     if [[ $file == cli_errors.sh ]]; then
       cited[$name]=1
-      if [[ -z ${printed[$name]+x} ]]; then
+      if [[ -n ${skipped[$name]+x} ]]; then
+        echo "warning row $number: cli_errors.sh skipped $name here; its message is not checked"
+      elif [[ -z ${printed[$name]+x} ]]; then
         echo "FAIL row $number: cli_errors.sh has no passing case $name"; fail=1
       elif [[ ${printed[$name]} != "$message" ]]; then
         echo "FAIL row $number ($name): the catalogue says"
