@@ -180,6 +180,9 @@ sweep sweepkey.yaml 'axis: {seed: [1]}\n'
 expect_error sweep_unknown_key 'sweepkey\.yaml: axis: unknown key \(allowed: name, description, base, axes, metrics\)' sweep sweepkey.yaml --out out
 sweep metric.yaml 'axes: {seed: [1]}\nmetrics: [seed]\n'
 expect_error sweep_metric_is_an_axis 'metric\.yaml: metrics\[0\]: seed is already a column: it is an axis' sweep metric.yaml --out out
+values=$(seq -s, 1 47)
+sweep many.yaml "axes:\n  seed: [$values]\n  sensor.rows: [$values]\n  sensor.cols: [$values]\n"
+expect_error sweep_too_many_runs 'many\.yaml: axes: expected at most 100000 runs' sweep many.yaml --out out
 sweep runfail.yaml 'axes:\n  views.0.xyz_m: [[0, 0, 1], [0, 0, -1]]\n'
 expect_error_after_start sweep_run_refused 'runfail\.yaml: run 1 \(views\.0\.xyz_m = \[0, 0, -1\]\): base\.yaml: views\[0\]\.xyz_m: expected the sensor above the terrain' out_runfail/results.csv sweep runfail.yaml --out out_runfail --quiet
 
@@ -208,12 +211,16 @@ expect_error basin_rotation_axis_unknown '--rotation-axis: expected random or ve
 expect_error basin_too_many_shards '--shard: 9/9: ' basin basin.yaml --out out --translation-m 0 --rotation-deg 0,5 --trials 2 --shard 9/9
 expect_error basin_merge_with_timing '--merge: merges the shards. files; --timing does not apply' basin basin.yaml --out out --merge --timing
 
+# ---- Experiments
+expect_error experiment_sweeps_missing 'nosweeps/tilt_noise\.yaml: cannot open file' experiment locus-vs-cartesian --out out --sweeps nosweeps --quiet
+
 # ---- Output directories (--out): in the program's words, before any work
 printf 'a file\n' >afile
 expect_error out_under_a_file_run '--out afile/run: cannot create the directory: afile is a file' run base.yaml --out afile/run
 expect_error out_under_a_file_sweep '--out afile/sweep: cannot create the directory: afile is a file' sweep ok.yaml --out afile/sweep
 expect_error out_under_a_file_basin '--out afile/basin: cannot create the directory: afile is a file' basin basin.yaml --out afile/basin
 expect_error out_is_a_file '--out afile: expected a directory, got a file' run base.yaml --out afile
+expect_error out_empty '--out: expected a directory, got ""' run base.yaml --out ''
 expect_error out_cannot_be_created '/proc/ambler_out: cannot create the directory \(No such file or directory\)' run base.yaml --out /proc/ambler_out --quiet
 
 # A read-only file system (a tmpfs mounted read-only on ro/ in a private mount namespace; root's
@@ -248,6 +255,15 @@ mkdir short && printf 'run,seed\n0,1\n' >short/results.shard-1-of-1.csv
 expect_error merge_run_missing 'short: run 1 is missing' sweep ok.yaml --out short --merge
 mkdir twice && printf 'run,seed\n0,1\n1,2\n0,1\n' >twice/results.shard-1-of-1.csv
 expect_error merge_run_duplicated 'twice/results\.shard-1-of-1\.csv: row 4: run 0 is duplicated' sweep ok.yaml --out twice --merge
+mkdir axes && printf 'run,noise\n0,1\n1,2\n' >axes/results.shard-1-of-1.csv
+expect_error merge_header_not_the_sweeps 'axes/results\.shard-1-of-1\.csv: header does not start with run and the sweep.s axes' sweep ok.yaml --out axes --merge
+mkdir notbasin && printf 'run,seed\n0,1\n' >notbasin/basin.shard-1-of-1.csv
+expect_error basin_merge_not_a_basin_csv 'notbasin/basin\.shard-1-of-1\.csv: not a basin CSV' basin basin.yaml --out notbasin --merge --translation-m 0 --rotation-deg 0 --trials 1
+basin_header='method,translation_m,rotation_deg,trial,translation_error_m,rotation_error_deg,success,iterations,time_s'
+mkdir basintwice && printf '%s\niconic_lm,0,0,0,0,0,true,1,\niconic_lm,0,0,0,0,0,true,1,\n' "$basin_header" >basintwice/basin.shard-1-of-1.csv
+expect_error basin_merge_row_twice 'basintwice/basin\.shard-1-of-1\.csv: row 3: a second row of iconic_lm' basin basin.yaml --out basintwice --merge --translation-m 0 --rotation-deg 0 --trials 1
+mkdir basinmethod && printf '%s\ngicp,0,0,0,0,0,true,1,\n' "$basin_header" >basinmethod/basin.shard-1-of-1.csv
+expect_error basin_merge_unknown_method 'basinmethod/basin\.shard-1-of-1\.csv: row 2: method gicp is not one of the scenario.s' basin basin.yaml --out basinmethod --merge --translation-m 0 --rotation-deg 0 --trials 1
 mkdir offgrid && printf 'method,translation_m,rotation_deg,trial,translation_error_m,rotation_error_deg,success,iterations,time_s\niconic_lm,0.7,0,0,0,0,true,1,\n' >offgrid/basin.shard-1-of-1.csv
 expect_error basin_merge_row_off_the_grid 'offgrid/basin\.shard-1-of-1\.csv: row 2: translation 0\.7 m is not on --translation-m' basin basin.yaml --out offgrid --merge --translation-m 0,0.5 --rotation-deg 0 --trials 1
 
