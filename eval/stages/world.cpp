@@ -50,8 +50,9 @@ std::optional<double> surfaceAt(const terrains::Terrain& terrain, double x, doub
 }
 
 // A view the terrain would swallow or that has no terrain under it: refused before the run writes
-// anything (docs/errors.md, "Views: over the terrain and above it"). `surface` is the terrain's top at (x, y) or
-// nullopt outside it; `free_below` says whether the sensor sees ground straight below it.
+// anything (docs/errors.md, "Views: over the terrain and above it"). `surface` is the terrain's
+// top at (x, y) or nullopt outside it; `free_below` says whether the sensor sees ground straight
+// below it.
 void checkView(const Scenario& sc, std::size_t k, const std::optional<double>& surface, bool free_below) {
   const Eigen::Vector3d& p = sc.views[k].xyz_m;
   const std::string where = (sc.file.empty() ? std::string("<string>") : sc.file.string()) + ": views[" +
