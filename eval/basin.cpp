@@ -311,8 +311,19 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
                  : std::string()) +
       " x " + std::to_string(spec.methods.size()) + " methods -> " + opt.out.string());
 
+  // The pair: the ordinary stages, into out/pair/ (the world stage makes the directories once
+  // the views are checked against the terrain).
+  RunState s{sc, opt.out / "pair", opt.progress};
+  for (const Stage& stage : {stages::world(), stages::scan(), stages::map()}) stage.run(s);
+  perception::RegistrationConfig config = registrationConfig(sc);
+  // The rover's prior covers every error the grid tries.
+  config.prior_translation_m = std::max(config.prior_translation_m, g.translation_m.back());
+  config.prior_rotation_deg = std::max(config.prior_rotation_deg, g.rotation_deg.back());
+  const ViewState& vi = s.views[std::size_t(pi)];
+  const ViewState& vj = s.views[std::size_t(pj)];
+  const PairRegistration pair(*vi.locus, vi.T_WS, *vj.locus, vj.T_WS, config, spec.methods);
+
   // The draws an earlier attempt registered (with --resume), then the journal open for this one's.
-  fs::create_directories(opt.out);
   const fs::path journal_file =
       opt.out / (opt.shard ? sweep_detail::shardName(*opt.shard, "basin", ".journal") : "basin.journal");
   Journal journal = openJournal(journal_file, journalIdentity(scenario, opt), drawCount(g), opt.resume);
@@ -333,18 +344,6 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
     say("resuming: " + std::to_string(todo.size() - pending.size()) + " of " + std::to_string(todo.size()) +
         " draws recorded in " + journal_file.string() +
         (journal.done.torn_tail ? " (a draw cut short while being recorded is registered again)" : ""));
-
-  // The pair: the ordinary stages, into out/pair/.
-  RunState s{sc, opt.out / "pair", opt.progress};
-  fs::create_directories(s.out);
-  for (const Stage& stage : {stages::world(), stages::scan(), stages::map()}) stage.run(s);
-  perception::RegistrationConfig config = registrationConfig(sc);
-  // The rover's prior covers every error the grid tries.
-  config.prior_translation_m = std::max(config.prior_translation_m, g.translation_m.back());
-  config.prior_rotation_deg = std::max(config.prior_rotation_deg, g.rotation_deg.back());
-  const ViewState& vi = s.views[std::size_t(pi)];
-  const ViewState& vj = s.views[std::size_t(pj)];
-  const PairRegistration pair(*vi.locus, vi.T_WS, *vj.locus, vj.T_WS, config, spec.methods);
 
   std::mutex mutex;  // guards the progress, the journal and the failures
   Progress progress("basin " + sc.name, todo.size(), todo.size() - pending.size(), Progress::modeFor(opt.progress),
@@ -436,7 +435,7 @@ fs::path mergeBasin(const Scenario& scenario, const BasinOptions& opt) {
       throw BasinError(path.string() + ": not a basin CSV (expected the header " + csvLine(kHeader).substr(0, 40) + "...)");
     for (std::size_t k = 1; k < records->size(); ++k) {
       const auto& row = (*records)[k];
-      const std::string where = path.string() + ": row " + std::to_string(k);
+      const std::string where = path.string() + ": row " + std::to_string(k + 1);  // the header is row 1, as in sweeps
       if (row.size() != kHeader.size()) throw BasinError(where + ": expected " + std::to_string(kHeader.size()) + " cells");
       const auto m = method_index.find(row[0]);
       const auto t = t_index.find(row[1]);

@@ -3,10 +3,15 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
+#include <system_error>
 
 #include "base/atomic_file.hpp"
 
@@ -22,7 +27,54 @@ std::string encode(const std::filesystem::path& path, const char* ext, const cv:
   return std::string(buf.begin(), buf.end());
 }
 
+namespace fs = std::filesystem;
+
+// What is in the way of writing in directory `dir`, or nullopt when nothing is found. Looks only:
+// `dir` must be a directory or not exist, and the nearest existing directory must be writable.
+std::optional<std::string> outDirProblem(const fs::path& dir) {
+  std::error_code ec;
+  const auto kind = [](const fs::file_status& st) {
+    return fs::is_regular_file(st) ? std::string("a file") : std::string("not a directory");
+  };
+  const fs::file_status st = fs::status(dir, ec);
+  if (fs::exists(st)) {
+    if (!fs::is_directory(st)) return "expected a directory, got " + kind(st);
+    if (::access(dir.c_str(), W_OK | X_OK) != 0)
+      return "cannot write in the directory (" + std::string(std::strerror(errno)) + ")";
+    return std::nullopt;
+  }
+  // The nearest ancestor that exists: the new directories are made in it.
+  for (fs::path parent = dir.parent_path();; parent = parent.parent_path()) {
+    const fs::path shown = parent.empty() ? fs::path(".") : parent;
+    const fs::file_status ps = fs::status(shown, ec);
+    if (!fs::exists(ps)) {
+      if (parent.empty() || parent == parent.root_path()) return std::nullopt;  // mkdir will say
+      continue;
+    }
+    if (!fs::is_directory(ps))
+      return "cannot create the directory: " + shown.string() + " is " +
+             (fs::is_regular_file(ps) ? "a file" : "not a directory");
+    if (::access(shown.c_str(), W_OK | X_OK) != 0)
+      return "cannot create the directory in " + shown.string() + " (" + std::strerror(errno) + ")";
+    return std::nullopt;
+  }
+}
+
 }  // namespace
+
+void checkOutDir(const fs::path& dir, const std::string& label) {
+  if (dir.empty()) throw std::runtime_error(label + ": expected a directory, got \"\"");
+  if (const auto problem = outDirProblem(dir))
+    throw std::runtime_error(label + " " + dir.string() + ": " + *problem);
+}
+
+void createOutDir(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (!ec) return;
+  if (const auto problem = outDirProblem(dir)) throw std::runtime_error(dir.string() + ": " + *problem);
+  throw std::runtime_error(dir.string() + ": cannot create the directory (" + ec.message() + ")");
+}
 
 void writeText(const std::filesystem::path& path, const std::string& text) {
   base::writeFileAtomic(path, text);

@@ -12,6 +12,14 @@
 
 namespace ambler::eval {
 
+// Output directories (docs/errors.md, "Output directories"). checkOutDir writes nothing: it
+// throws std::runtime_error "<label> <dir>: <what is wrong>" when `dir` cannot be a directory the
+// program writes in (a file is in the way, or the nearest existing ancestor is not writable), so a
+// command can refuse a bad --out before it does any work. createOutDir creates `dir` and its
+// parents, with the same one-line message on failure instead of the library's.
+void checkOutDir(const std::filesystem::path& dir, const std::string& label = "--out");
+void createOutDir(const std::filesystem::path& dir);
+
 void writeText(const std::filesystem::path& path, const std::string& text);
 // Pretty-printed with a trailing newline; key order as inserted.
 void writeJson(const std::filesystem::path& path, const nlohmann::ordered_json& json);

@@ -3,11 +3,14 @@
 
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <iostream>
+#include <string>
 
 #include "eval/basin.hpp"
 #include "eval/bench.hpp"
 #include "eval/experiment.hpp"
+#include "eval/io.hpp"
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
 #include "eval/sweep.hpp"
@@ -144,17 +147,35 @@ int main(int argc, char** argv) {
                      "Run nothing: report DIR/basin/results.csv as it is (e.g. merged from shards)");
   matching->add_flag("--quiet,-q", match_quiet, "No progress lines on stderr");
 
+  // CLI11 would say "A subcommand is required" for a mistyped command.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+      known = known || sub->get_name() == argv[1];
+    }
+    if (!known) {
+      std::fprintf(stderr, "ambler: error: %s: unknown command (expected one of %s; see --help)\n", argv[1], names.c_str());
+      return 1;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    // One line, as every other refusal (CLI11's own adds "Run with --help ..." on a second line).
+    std::fprintf(stderr, "ambler: error: %s (see --help)\n", e.what());
+    return e.get_exit_code();
   }
 
   try {
     if (*run) {
+      checkOutDir(out_dir);
       const Scenario sc = loadScenario(scenario_file);
       runScenario(sc, RunOptions{out_dir, !quiet});
     } else if (*sweep) {
+      checkOutDir(sweep_out);
       SweepOptions opt{sweep_out, std::nullopt, sweep_jobs, parseKeep(sweep_keep), sweep_timing, !sweep_quiet,
                        sweep_resume};
       if (shard_opt->count()) opt.shard = parseShard(sweep_shard);
@@ -169,6 +190,7 @@ int main(int argc, char** argv) {
       else
         runSweep(sw, opt);
     } else if (*basin) {
+      checkOutDir(basin_out);
       basin_opt.out = basin_out;
       basin_opt.progress = !basin_quiet;
       if (basin_t_opt->count()) basin_opt.grid.translation_m = parseBasinAxis(basin_t, "--translation-m", 100.0);
@@ -187,11 +209,13 @@ int main(int argc, char** argv) {
       else
         runBasin(sc, basin_opt);
     } else if (*locus_vs_cartesian) {
+      checkOutDir(exp_out);
       exp_opt.out = exp_out;
       exp_opt.sweeps = exp_sweeps;
       exp_opt.progress = !exp_quiet;
       std::fputs(runLocusVsCartesian(exp_opt).c_str(), stdout);
     } else if (*matching) {
+      checkOutDir(match_out);
       match_opt.out = match_out;
       match_opt.sweeps = match_sweeps;
       match_opt.progress = !match_quiet;
@@ -209,6 +233,18 @@ int main(int argc, char** argv) {
       bench_match_opt.json = bench_match_json;
       benchMatch(loadScenario(bench_match_scenario), bench_match_opt);
     }
+  } catch (const std::filesystem::filesystem_error& e) {
+    // The library's words ("filesystem error: cannot create directories: Not a directory [x]")
+    // as the program's: "x: cannot create directories: Not a directory".
+    std::string what = e.what();
+    const std::string prefix = "filesystem error: ";
+    std::string suffix = " [" + e.path1().string() + "]";
+    if (!e.path2().empty()) suffix += " [" + e.path2().string() + "]";
+    if (what.starts_with(prefix)) what.erase(0, prefix.size());
+    if (what.ends_with(suffix)) what.erase(what.size() - suffix.size());
+    std::fprintf(stderr, "ambler: error: %s%s\n", e.path1().empty() ? "" : (e.path1().string() + ": ").c_str(),
+                 what.c_str());
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "ambler: error: %s\n", e.what());
     return 1;

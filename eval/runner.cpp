@@ -13,7 +13,8 @@ std::uint64_t viewSeed(std::uint64_t seed, int view) { return base::streamKey(se
 nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
   Stopwatch total;
   RunState state{sc, opt.out, opt.progress};
-  fs::create_directories(state.out);
+  // No directory yet: the world stage makes it once the views are checked against the terrain,
+  // so a refused scenario leaves nothing behind.
   state.metrics["name"] = sc.name;
   state.metrics["seed"] = sc.seed;
   for (const Stage& stage : runStages())

@@ -202,7 +202,7 @@ perception::SensorModel readSensor(const Reader& reader, const YAML::Node& node)
   return s;
 }
 
-std::vector<ViewSpec> readViews(const Reader& reader, const YAML::Node& node) {
+std::vector<ViewSpec> readViews(const Reader& reader, const YAML::Node& node, const terrains::TerrainSpec& t) {
   if (!node.IsSequence() || node.size() == 0) {
     reader.fail("views", "expected a non-empty list of views, got " + shown(node));
   }
@@ -214,6 +214,18 @@ std::vector<ViewSpec> readViews(const Reader& reader, const YAML::Node& node) {
     view.xyz_m = {xyz[0], xyz[1], xyz[2]};
     if (const auto rpy = f.numbers<3>("rpy_deg", {-360.0, 360.0, false, false})) {
       view.rpy_rad = {degToRad((*rpy)[0]), degToRad((*rpy)[1]), degToRad((*rpy)[2])};
+    }
+    // A generated terrain spans its heightfield's samples, as terrains::makeTerrain lays them out;
+    // an MJCF world's extent is only known once it is loaded (the world stage checks it there).
+    if (t.kind != TerrainKind::Mjcf) {
+      const double hx = std::round(t.size_m.x() / t.cell_m) * t.cell_m / 2.0;
+      const double hy = std::round(t.size_m.y() / t.cell_m) * t.cell_m / 2.0;
+      if (std::abs(xyz[0]) > hx || std::abs(xyz[1]) > hy) {
+        const auto m = [](double v) { return shortest(std::round(v * 1e6) / 1e6); };  // 10, not 10.000000000000002
+        reader.fail(f.pathOf("xyz_m"), "expected x in [" + m(-hx) + ", " + m(hx) + "] and y in [" + m(-hy) + ", " +
+                                           m(hy) + "] (over the terrain), got [" +
+                                           shortest(xyz[0]) + ", " + shortest(xyz[1]) + ", " + shortest(xyz[2]) + "]");
+      }
     }
     views.push_back(view);
   }
@@ -408,7 +420,7 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
   }
   s.terrain = readTerrain(reader, f.required("terrain"), file);
   if (const auto node = f.get("sensor")) s.sensor = readSensor(reader, *node);
-  s.views = readViews(reader, f.required("views"));
+  s.views = readViews(reader, f.required("views"), s.terrain);
   if (const auto node = f.get("map")) s.map = readMap(reader, *node);
   if (const auto node = f.get("matching")) {
     if (!s.map) reader.fail("matching", "needs a map section: the views are matched through their maps");

@@ -223,7 +223,7 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
            ? " (shard " + std::to_string(opt.shard->index) + " of " + std::to_string(opt.shard->count) + ")"
            : "") +
       ", " + std::to_string(jobs) + (jobs == 1 ? " job" : " jobs") + " -> " + opt.out.string());
-  fs::create_directories(opt.out / "runs");
+  createOutDir(opt.out / "runs");
 
   // The runs an earlier attempt finished (with --resume), then the journal open for this one's.
   Journal journal = openJournal(journal_file, journalIdentity(sweep, opt, todo), total, opt.resume);

@@ -419,7 +419,8 @@ TEST(ScenarioRoundTrip, NumbersReadBackBitForBit) {
     const std::uint64_t raw = rng();
     double any = std::bit_cast<double>(raw);
     if (!std::isfinite(any)) any = -0.0;
-    s.views[0].xyz_m = {any, std::ldexp(double(rng() % 1000), -1070), -0.0};
+    // x and y must lie over the terrain (the reader refuses a view outside it); z is free.
+    s.views[0].xyz_m = {std::ldexp(double(rng() % 1000), -1070), -0.0, any};
     s.seed = rng();
     s.terrain.cell_m = std::uniform_real_distribution<double>(0.01, 1.0)(rng);
     s.map->epsilon_rad = std::uniform_real_distribution<double>(1e-12, 1e-3)(rng);
@@ -633,6 +634,20 @@ TEST(ScenarioErrors, RelationsBetweenKeys) {
               "expected at most 25000000 grid points");
   expectError("name: t\nterrain: {kind: plane, mjcf: w.xml}\nviews: [{xyz_m: [0, 0, 1]}]\n",
               "terrain.mjcf", "only allowed with kind: mjcf");
+}
+
+// A view must stand over the generated terrain: its heightfield spans round(size / cell) cells,
+// centred on the origin. (Below the surface is a run-time check: test_run.cpp.)
+TEST(ScenarioErrors, ViewsStandOverTheTerrain) {
+  EXPECT_EQ(errorOf("name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}, {xyz_m: [12, 0, 3]}]\n"),
+            kFile + ": views[1].xyz_m: expected x in [-10, 10] and y in [-10, 10] (over the terrain), got [12, 0, 3]");
+  expectError("name: t\nterrain: {kind: plane, size_m: [20, 6]}\nviews: [{xyz_m: [0, -3.5, 1]}]\n", "views[0].xyz_m",
+              "expected x in [-10, 10] and y in [-3, 3] (over the terrain), got [0, -3.5, 1]");
+  // 1.04 m at 0.1 m cells is 10 cells (round(10.4)): the terrain is 1 m wide, so x = 0.52 is off it.
+  expectError("name: t\nterrain: {kind: plane, size_m: [1.04, 4], cell_m: 0.1}\nviews: [{xyz_m: [0.52, 0, 1]}]\n",
+              "views[0].xyz_m", "expected x in [-0.5, 0.5] and y in [-2, 2]");
+  // The edges themselves are over the terrain.
+  EXPECT_EQ(parseScenario("name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [-10, 10, 1]}]\n", kFile).views.size(), 1u);
 }
 
 TEST(ScenarioErrors, MjcfFileMustExist) {
