@@ -4,8 +4,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <numbers>
 #include <set>
@@ -14,6 +14,7 @@
 #include <utility>
 
 #include "eval/io.hpp"
+#include "eval/message_text.hpp"
 #include "perception/sensor_geometry.hpp"
 
 namespace ambler::eval {
@@ -26,21 +27,16 @@ using Json = nlohmann::json;
 double degrees(double rad) { return rad * 180.0 / std::numbers::pi; }
 double radians(double deg) { return deg * std::numbers::pi / 180.0; }
 
+// One line: keys and library messages are escaped (eval/message_text.hpp).
 [[noreturn]] void fail(const std::string& file, const std::string& key, const std::string& what) {
-  throw ScanError(file + ": " + (key.empty() ? "" : key + ": ") + what);
+  throw ScanError(file + ": " + (key.empty() ? "" : escapedLine(key) + ": ") + escapedLine(what));
 }
 
-// Library text on one line (a message must be one line).
-std::string oneLine(std::string text) {
-  for (char& c : text)
-    if (c == '\n' || c == '\r') c = ' ';
-  return text;
-}
-
+// The shortest text that reads back to v.
 std::string shortest(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
+  const auto end = std::to_chars(buf, buf + sizeof buf, v).ptr;
+  return std::string(buf, end);
 }
 
 std::string readBytes(const fs::path& path) {
@@ -158,7 +154,7 @@ ScanMeta parseScanMeta(const std::string& json_text, const std::string& file) {
   try {
     j = Json::parse(json_text, DuplicateKeys{file, {}});
   } catch (const Json::exception& e) {
-    fail(file, "", "not JSON: " + oneLine(e.what()));
+    fail(file, "", std::string("not JSON: ") + e.what());
   }
   object(file, j, "", {"phi_rad", "theta_rad", "pose"});
   ScanMeta meta;
@@ -178,7 +174,7 @@ perception::Raster<float> decodeRangeTiff(const std::string& bytes, const std::s
     const cv::Mat buf(1, int(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
     m = cv::imdecode(buf, cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
-    fail(file, "", "cannot decode TIFF: " + oneLine(e.what()));
+    fail(file, "", std::string("cannot decode TIFF: ") + e.what());
   }
   if (m.empty()) fail(file, "", "cannot decode TIFF");
   if (m.type() != CV_32FC1) {
