@@ -3,7 +3,9 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -67,11 +69,16 @@ JournalContents parseJournal(std::string_view text, const std::filesystem::path&
   }
   const std::string_view first = text.substr(0, eol + 1);
   if (first != expected) {
-    if (first.substr(0, kMagic.size()) == kMagic)
-      throw JournalError(where + "recorded for another sweep or basin, or other options (identity " +
-                         std::string(first.substr(kMagic.size(), first.size() - kMagic.size() - 1)) +
+    if (first.substr(0, kMagic.size()) == kMagic) {
+      std::string theirs(first.substr(kMagic.size(), first.size() - kMagic.size() - 1));
+      const bool printable = theirs.size() <= 64 && std::all_of(theirs.begin(), theirs.end(), [](char ch) {
+                               return std::isalnum(static_cast<unsigned char>(ch)) != 0;
+                             });
+      if (!printable) theirs = "not readable";
+      throw JournalError(where + "recorded for another sweep or basin, or other options (identity " + theirs +
                          ", this one " + std::string(identity) +
                          "); run without --resume to start over, or give it its own --out");
+    }
     throw JournalError(where + "not an ambler journal (its first line is not \"" + std::string(kMagic) +
                        "<identity>\"); remove it or run without --resume");
   }

@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "eval/scenario_reader.hpp"
+#include "eval/yaml_documents.hpp"
 
 namespace ambler::eval {
 namespace {
@@ -517,7 +518,7 @@ Scenario parseScenario(const std::string& yaml_text, const fs::path& file) {
   const Reader reader(file.empty() ? "<string>" : file.string());
   std::vector<YAML::Node> documents;
   try {
-    documents = YAML::LoadAll(yaml_text);
+    documents = loadAllDocuments(yaml_text);  // not YAML::LoadAll: it can hang
   } catch (const YAML::Exception& e) {
     const std::string where = e.mark.is_null()
                                   ? ""

@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "eval/message_text.hpp"
 #include "eval/scenario.hpp"
 #include "eval/scenario_internal.hpp"
 
@@ -64,7 +65,8 @@ class Reader {
   explicit Reader(std::string file) : file_(std::move(file)) {}
 
   [[noreturn]] void fail(std::string_view path, const std::string& what) const {
-    throw ScenarioError(file_ + ": " + (path.empty() ? "" : std::string(path) + ": ") + what);
+    // Escaped: a key or a yaml-cpp message may hold a line break (docs/fuzzing.md).
+    throw ScenarioError(file_ + ": " + (path.empty() ? "" : escapedLine(path) + ": ") + escapedLine(what));
   }
 
   double number(const YAML::Node& node, const std::string& path, const Range& range) const {

@@ -14,7 +14,9 @@
 #include <unordered_map>
 #include <utility>
 
+#include "eval/message_text.hpp"
 #include "eval/sweep_internal.hpp"
+#include "eval/yaml_documents.hpp"
 
 namespace ambler::eval {
 namespace {
@@ -170,13 +172,14 @@ class SweepReader {
       : file_(file), where_(file.empty() ? "<string>" : file.string()) {}
 
   [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-    throw SweepError(where_ + ": " + (key.empty() ? "" : key + ": ") + what);
+    // Escaped: a key or a yaml-cpp message may hold a line break (docs/fuzzing.md).
+    throw SweepError(where_ + ": " + (key.empty() ? "" : escapedLine(key) + ": ") + escapedLine(what));
   }
 
   Sweep read(const std::string& text) {
     std::vector<YAML::Node> docs;
     try {
-      docs = YAML::LoadAll(text);
+      docs = loadAllDocuments(text);  // not YAML::LoadAll: it can hang
     } catch (const YAML::Exception& e) {
       fail(e.mark.is_null()
                ? ""
@@ -359,7 +362,7 @@ class SweepReader {
     const std::string base_where = where_ + ": base";
     YAML::Node base;
     try {
-      const auto docs = YAML::LoadAll(base_text_);
+      const auto docs = loadAllDocuments(base_text_);
       if (docs.size() == 1 && docs.front().IsMap()) base = docs.front();
     } catch (const YAML::Exception&) {
     }

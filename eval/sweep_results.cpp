@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "eval/io.hpp"
+#include "eval/message_text.hpp"
 #include "eval/sweep_internal.hpp"
 
 namespace ambler::eval {
@@ -192,9 +193,10 @@ fs::path mergeSweep(const Sweep& sweep, const fs::path& out, bool progress) {
                          ")");
       const auto expected = axisCells(sweep, k);
       if (!std::equal(expected.begin(), expected.end(), row.begin())) {
+        // Escaped: a quoted cell may hold a line break (docs/fuzzing.md).
         throw SweepError(at + "run " + std::to_string(k) + ": cells " +
-                         csvText({row.begin(), row.begin() + std::ptrdiff_t(expected.size())}) +
-                         " differ from the sweep file's " + csvText(expected) +
+                         escapedLine(csvText({row.begin(), row.begin() + std::ptrdiff_t(expected.size())})) +
+                         " differ from the sweep file's " + escapedLine(csvText(expected)) +
                          " (was it edited after the shards ran?)");
       }
       rows[k] = row;

@@ -12,6 +12,7 @@ packages=(
   libgtest-dev libgmock-dev
   libopen3d-dev                     # the registration peers (eval/peers/ only)
   git jq                            # scripts/same-outputs.sh: revisions to compare, metrics.json
+  clang libclang-rt-dev             # scripts/fuzz.sh: clang++ 14 and its libFuzzer/ASan/UBSan runtimes
 )
 missing=()
 for p in "${packages[@]}"; do

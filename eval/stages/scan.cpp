@@ -1,30 +1,19 @@
 // The scan stage: one range image per view from the ERIM emulator at the view's true pose, scored
 // against the true ranges; scans/view_<k>_range.tiff, _meta.json, .ply and .png.
 #include <cstdio>
-#include <numbers>
 
 #include "base/random.hpp"
 #include "eval/figures.hpp"
 #include "eval/io.hpp"
 #include "eval/metrics.hpp"
 #include "eval/runner.hpp"
+#include "eval/scan_reader.hpp"
 #include "eval/stages.hpp"
 #include "perception/sensor_geometry.hpp"
 
 namespace ambler::eval::stages {
 
 namespace {
-
-double degrees(double rad) { return rad * 180.0 / std::numbers::pi; }
-
-nlohmann::ordered_json scanMeta(const perception::RangeImage& img, const ViewSpec& view) {
-  nlohmann::ordered_json j;
-  j["phi_rad"] = img.phi;
-  j["theta_rad"] = img.theta;
-  j["pose"]["xyz_m"] = {view.xyz_m.x(), view.xyz_m.y(), view.xyz_m.z()};
-  j["pose"]["rpy_deg"] = {degrees(view.rpy_rad.x()), degrees(view.rpy_rad.y()), degrees(view.rpy_rad.z())};
-  return j;
-}
 
 std::vector<Eigen::Vector3f> returnsInWorld(const perception::RangeImage& img) {
   std::vector<Eigen::Vector3f> pts;
@@ -50,8 +39,7 @@ void run(RunState& s) {
     s.addTime("scan", t.seconds());
     const sim::Scan& scan = *view.scan;
     const std::filesystem::path base = s.out / "scans" / viewName(k);
-    writeTiff(base.string() + "_range.tiff", scan.image.range);
-    writeJson(base.string() + "_meta.json", scanMeta(scan.image, v));
+    writeScan(base, scan.image, v);
     writePly(base.string() + ".ply", returnsInWorld(scan.image));
     writePng(base.string() + ".png",
              rangePicture(scan.image, sensor.max_range_m, sc.name + ": " + viewName(k) + " range"));
