@@ -12,6 +12,8 @@ packages=(
   libgtest-dev libgmock-dev
   libopen3d-dev                     # the registration peers (eval/peers/ only)
   git jq                            # scripts/same-outputs.sh: revisions to compare, metrics.json
+  slurmctld slurmd slurm-client munge  # tests/cluster/slurm.sh: a one-node Slurm cluster (no daemon is started)
+  parallel                          # tests/cluster/parallel.sh: GNU parallel
 )
 missing=()
 for p in "${packages[@]}"; do
