@@ -39,6 +39,7 @@ teardown() {
   rm -rf "$tmp"
 }
 trap teardown EXIT
+trap 'exit 1' INT TERM HUP
 
 # munge: a key of our own and a daemon on our own socket
 dd if=/dev/urandom of="$tmp/munge.key" bs=1024 count=1 status=none
@@ -106,14 +107,14 @@ pids+=($!)
 slurmd -D -f "$SLURM_CONF" >"$tmp/slurmd.out" 2>&1 &
 pids+=($!)
 up=0
-for _ in $(seq 300); do  # 30 s
-  if [[ $(sinfo --noheader --nodes="$node" --format=%t 2>/dev/null) == idle ]]; then up=1; break; fi
-  sleep 0.1
+deadline=$((SECONDS + 30))
+while ((SECONDS < deadline)); do
+  if [[ $(timeout 5 sinfo --noheader --nodes="$node" --format=%t 2>/dev/null) == idle ]]; then up=1; break; fi
+  sleep 0.2
 done
 if ((!up)); then
-  echo "slurmctld.log:"; tail -n 5 "$tmp/slurmctld.log" 2>/dev/null
-  echo "slurmd.log:"; tail -n 5 "$tmp/slurmd.log" 2>/dev/null
-  skip "node $node not idle within 30 s (sinfo: $(sinfo --noheader 2>&1 | head -n 1))"
+  skip "node $node not idle within 30 s (sinfo: $(timeout 5 sinfo --noheader 2>&1 | head -n 1);" \
+    "slurmctld: $(tail -n 1 "$tmp/slurmctld.log" 2>/dev/null); slurmd: $(tail -n 1 "$tmp/slurmd.log" 2>/dev/null))"
 fi
 echo "slurm: node $node idle after $(elapsed): $(sinfo --noheader --format='%P %D %c %t')"
 
@@ -125,12 +126,15 @@ check_doc_shows "$src/docs/basin.md" "$src/docs/examples/basin.sbatch" || fail=1
 submit() {
   local what=$1
   shift
-  if ! (cd "$tmp/$what" && AMBLER=$ambler sbatch --array=1-3 --wait --quiet "$@"); then
+  if ! (cd "$tmp/$what" && AMBLER=$ambler timeout 240 sbatch --array=1-3 --wait --quiet "$@"); then
     echo "FAIL $what: the job array failed"
     cat "$tmp/$what"/slurm-*.out 2>/dev/null
     tail -n 20 "$tmp/slurmd.log" 2>/dev/null
     return 1
   fi
+  local outs
+  outs=$(ls "$tmp/$what"/slurm-*_[123].out 2>/dev/null | wc -l)
+  if [[ $outs -ne 3 ]]; then echo "FAIL $what: $outs of 3 array tasks left their slurm-JOB_TASK.out"; return 1; fi
 }
 
 # The sweep, as docs/sweeps.md says: submit, wait, merge; then the same sweep in one process.
