@@ -122,7 +122,8 @@ fail=0
 check_doc_shows "$src/docs/sweeps.md" "$src/docs/examples/sweep.sbatch" || fail=1
 check_doc_shows "$src/docs/basin.md" "$src/docs/examples/basin.sbatch" || fail=1
 
-# Submits the given job script as a 3-task array and waits; prints the tasks' output on failure.
+# submit WHAT SCRIPT ARGS...: submits SCRIPT from $tmp/WHAT as a 3-task array and waits; prints the
+# tasks' output on failure.
 submit() {
   local what=$1
   shift
@@ -140,7 +141,7 @@ submit() {
 # The sweep, as docs/sweeps.md says: submit, wait, merge; then the same sweep in one process.
 mkdir -p "$tmp/sweep"
 sweep=$here/sweep.yaml
-if submit sweep "$src/docs/examples/sweep.sbatch" "$sweep" "$tmp/sweep/runs"; then
+if submit sweep "$src/docs/examples/sweep.sbatch" "$sweep" runs; then  # DIR relative to the submit directory
   echo "slurm: sweep job array done after $(elapsed)"
   "$ambler" sweep "$sweep" --out "$tmp/sweep/runs" --merge --quiet || fail=1
   "$ambler" sweep "$sweep" --out "$tmp/sweep/whole" --quiet || fail=1
@@ -153,7 +154,7 @@ fi
 mkdir -p "$tmp/basin"
 scenario=$here/basin.yaml
 grid=(--translation-m 0,0.5 --rotation-deg 0,5 --trials 2)
-if submit basin "$src/docs/examples/basin.sbatch" "$scenario" "$tmp/basin/runs" "${grid[@]}"; then
+if submit basin "$src/docs/examples/basin.sbatch" "$scenario" runs "${grid[@]}"; then
   echo "slurm: basin job array done after $(elapsed)"
   "$ambler" basin "$scenario" --out "$tmp/basin/runs" --merge --quiet "${grid[@]}" || fail=1
   "$ambler" basin "$scenario" --out "$tmp/basin/whole" --quiet "${grid[@]}" || fail=1
