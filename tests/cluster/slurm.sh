@@ -5,8 +5,8 @@
 # docs/sweeps.md and docs/basin.md show (docs/examples/sweep.sbatch, basin.sbatch) as 3-task job
 # arrays with `sbatch --wait`, merges the shards, and checks that results.csv and basin.csv are
 # byte-identical to the same sweep and basin run in one process. Everything is torn down on exit.
-# Exit 77 (ctest: skipped) when the cluster cannot be brought up: not root, a binary missing, or
-# the daemons not up within the timeout.
+# Exit 77 (ctest: skipped) when the cluster cannot be brought up: not root, a binary missing, a
+# daemon exiting, or the node not idle within 30 s.
 #   usage: slurm.sh AMBLER SOURCE_DIR
 set -uo pipefail
 ambler=$(realpath "$1")
@@ -25,11 +25,10 @@ tmp=$(mktemp -d /tmp/ambler-slurm.XXXXXX)
 chmod 711 "$tmp"  # munged wants the socket's directory searchable
 pids=()
 teardown() {
-  if [[ -f $tmp/slurm.conf ]]; then
-    SLURM_CONF=$tmp/slurm.conf scancel --quiet --partition=test 2>/dev/null
+  if [[ -f $tmp/slurm.conf ]] && SLURM_CONF=$tmp/slurm.conf timeout 5 scancel --quiet --partition=test 2>/dev/null; then
     # let slurmd end the job steps before it goes
     for _ in $(seq 50); do
-      [[ -z $(SLURM_CONF=$tmp/slurm.conf squeue --noheader 2>/dev/null) ]] && break
+      [[ -z $(SLURM_CONF=$tmp/slurm.conf timeout 5 squeue --noheader 2>/dev/null) ]] && break
       sleep 0.2
     done
   fi
@@ -103,13 +102,23 @@ PartitionName=test Nodes=$node Default=YES MaxTime=INFINITE State=UP
 EOF
 export SLURM_CONF=$tmp/slurm.conf
 slurmctld -D -i -f "$SLURM_CONF" >"$tmp/slurmctld.out" 2>&1 &
-pids+=($!)
+ctld_pid=$!
+pids+=($ctld_pid)
 slurmd -D -f "$SLURM_CONF" >"$tmp/slurmd.out" 2>&1 &
-pids+=($!)
+slurmd_pid=$!
+pids+=($slurmd_pid)
+# a daemon that exits is not coming up (slurmd needs /sys/fs/cgroup even without cgroup plugins:
+# in a chroot without /sys it says "Unable to initialize cgroup plugin")
+gone() {  # name pid log: skips when the daemon has exited
+  kill -0 "$2" 2>/dev/null && return
+  skip "$1 exited: $(grep -h 'error:' "$3" "$tmp/$1.out" 2>/dev/null | sed 's/^\[[^]]*\] //' | head -n 2 | tr '\n' ' ')"
+}
 up=0
 deadline=$((SECONDS + 30))
 while ((SECONDS < deadline)); do
   if [[ $(timeout 5 sinfo --noheader --nodes="$node" --format=%t 2>/dev/null) == idle ]]; then up=1; break; fi
+  gone slurmctld "$ctld_pid" "$tmp/slurmctld.log"
+  gone slurmd "$slurmd_pid" "$tmp/slurmd.log"
   sleep 0.2
 done
 if ((!up)); then
