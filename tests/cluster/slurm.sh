@@ -136,7 +136,7 @@ check_doc_shows "$src/docs/basin.md" "$src/docs/examples/basin.sbatch" || fail=1
 submit() {
   local what=$1
   shift
-  if ! (cd "$tmp/$what" && AMBLER=$ambler timeout 240 sbatch --array=1-3 --wait --quiet "$@"); then
+  if ! (cd "$tmp/$what" && AMBLER=$ambler timeout 120 sbatch --array=1-3 --wait --quiet "$@"); then
     echo "FAIL $what: the job array failed"
     cat "$tmp/$what"/slurm-*.out 2>/dev/null
     tail -n 20 "$tmp/slurmd.log" 2>/dev/null
