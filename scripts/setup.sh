@@ -13,6 +13,8 @@ packages=(
   libopen3d-dev                     # the registration peers (eval/peers/ only)
   git jq                            # scripts/same-outputs.sh: revisions to compare, metrics.json
   clang libclang-rt-dev             # scripts/fuzz.sh: clang++ 14 and its libFuzzer/ASan/UBSan runtimes
+  slurmctld slurmd slurm-client munge  # tests/cluster/slurm.sh: a one-node Slurm cluster (no daemon is started)
+  parallel                          # tests/cluster/parallel.sh: GNU parallel
 )
 missing=()
 for p in "${packages[@]}"; do
