@@ -303,6 +303,25 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   std::vector<std::size_t> todo;
   for (std::size_t u = 0; u < drawCount(g); ++u)
     if (!opt.shard || u % std::size_t(opt.shard->count) == std::size_t(opt.shard->index - 1)) todo.push_back(u);
+  // With --resume, what an earlier attempt recorded, checked before anything runs or is written.
+  const fs::path journal_file =
+      opt.out / (opt.shard ? sweep_detail::shardName(*opt.shard, "basin", ".journal") : "basin.journal");
+  const std::string identity = journalIdentity(scenario, opt);
+  const bool resuming = opt.resume && fs::exists(journal_file);
+  const JournalContents done = opt.resume ? readJournal(journal_file, identity, drawCount(g)) : JournalContents{};
+  std::vector<Rows> rows(todo.size());
+  std::vector<std::size_t> pending;  // indices into todo
+  for (std::size_t i = 0; i < todo.size(); ++i) {
+    const auto it = done.records.find(todo[i]);
+    if (it == done.records.end()) {
+      pending.push_back(i);
+    } else {
+      rows[i] = rowsFromPayload(it->second, journal_file, todo[i], spec.methods.size());
+    }
+  }
+  if (done.records.size() != todo.size() - pending.size())
+    throw JournalError(journal_file.string() + ": records draws that are not in this " +
+                       (opt.shard ? "shard" : "basin") + "; run without --resume to start over");
   say("basin " + sc.name + ": views " + std::to_string(pi) + "-" + std::to_string(pj) + ", " +
       std::to_string(g.translation_m.size()) + " translations x " + std::to_string(g.rotation_deg.size()) +
       " rotations x " + std::to_string(g.trials) + " trials, " + std::to_string(todo.size()) + " of " +
@@ -323,27 +342,12 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   const ViewState& vj = s.views[std::size_t(pj)];
   const PairRegistration pair(*vi.locus, vi.T_WS, *vj.locus, vj.T_WS, config, spec.methods);
 
-  // The draws an earlier attempt registered (with --resume), then the journal open for this one's.
-  const fs::path journal_file =
-      opt.out / (opt.shard ? sweep_detail::shardName(*opt.shard, "basin", ".journal") : "basin.journal");
-  Journal journal = openJournal(journal_file, journalIdentity(scenario, opt), drawCount(g), opt.resume);
-  std::vector<Rows> rows(todo.size());
-  std::vector<std::size_t> pending;  // indices into todo
-  for (std::size_t i = 0; i < todo.size(); ++i) {
-    const auto it = journal.done.records.find(todo[i]);
-    if (it == journal.done.records.end()) {
-      pending.push_back(i);
-    } else {
-      rows[i] = rowsFromPayload(it->second, journal_file, todo[i], spec.methods.size());
-    }
-  }
-  if (journal.done.records.size() != todo.size() - pending.size())
-    throw JournalError(journal_file.string() + ": records draws that are not in this " +
-                       (opt.shard ? "shard" : "basin") + "; run without --resume to start over");
+  // The draws an earlier attempt registered, then the journal open for this one's.
+  JournalWriter journal(journal_file, identity, resuming, done.valid_bytes);
   if (opt.resume)
     say("resuming: " + std::to_string(todo.size() - pending.size()) + " of " + std::to_string(todo.size()) +
         " draws recorded in " + journal_file.string() +
-        (journal.done.torn_tail ? " (a draw cut short while being recorded is registered again)" : ""));
+        (done.torn_tail ? " (a draw cut short while being recorded is registered again)" : ""));
 
   std::mutex mutex;  // guards the progress, the journal and the failures
   Progress progress("basin " + sc.name, todo.size(), todo.size() - pending.size(), Progress::modeFor(opt.progress),
@@ -381,7 +385,7 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
       }
       const std::lock_guard lock(mutex);
       try {
-        journal.writer->append(todo[i], rowsPayload(rows[i]));
+        journal.append(todo[i], rowsPayload(rows[i]));
       } catch (const JournalError& e) {
         stop = true;
         if (!fatal) fatal = e.what();

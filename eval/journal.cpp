@@ -3,9 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <array>
-#include <cctype>
 #include <cerrno>
 #include <charconv>
 #include <cstring>
@@ -69,16 +67,9 @@ JournalContents parseJournal(std::string_view text, const std::filesystem::path&
   }
   const std::string_view first = text.substr(0, eol + 1);
   if (first != expected) {
-    if (first.substr(0, kMagic.size()) == kMagic) {
-      std::string theirs(first.substr(kMagic.size(), first.size() - kMagic.size() - 1));
-      const bool printable = theirs.size() <= 64 && std::all_of(theirs.begin(), theirs.end(), [](char ch) {
-                               return std::isalnum(static_cast<unsigned char>(ch)) != 0;
-                             });
-      if (!printable) theirs = "not readable";
-      throw JournalError(where + "recorded for another sweep or basin, or other options (identity " + theirs +
-                         ", this one " + std::string(identity) +
-                         "); run without --resume to start over, or give it its own --out");
-    }
+    if (first.substr(0, kMagic.size()) == kMagic)
+      throw JournalError(where + "recorded for another sweep or basin, or with other options (its identity "
+                                 "differs); run without --resume to start over, or give this one its own --out");
     throw JournalError(where + "not an ambler journal (its first line is not \"" + std::string(kMagic) +
                        "<identity>\"); remove it or run without --resume");
   }
@@ -182,16 +173,19 @@ void JournalWriter::append(std::size_t item, std::string_view payload) {
   writeAll(std::to_string(item) + " " + hex(crc32(payload), 8) + " " + std::string(payload) + "\n");
 }
 
+JournalContents readJournal(const std::filesystem::path& file, std::string_view identity, std::size_t items) {
+  if (!std::filesystem::exists(file)) return {};
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw JournalError(file.string() + ": cannot read the journal: " + systemError(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseJournal(text.str(), file, identity, items);
+}
+
 Journal openJournal(const std::filesystem::path& file, std::string_view identity, std::size_t items, bool resume) {
   Journal j;
   const bool exists = std::filesystem::exists(file);
-  if (resume && exists) {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw JournalError(file.string() + ": cannot read the journal: " + systemError(errno));
-    std::ostringstream text;
-    text << in.rdbuf();
-    j.done = parseJournal(text.str(), file, identity, items);
-  }
+  if (resume) j.done = readJournal(file, identity, items);
   j.writer = std::make_unique<JournalWriter>(file, identity, resume && exists, j.done.valid_bytes);
   return j;
 }

@@ -68,6 +68,10 @@ class JournalWriter {
   std::size_t size_ = 0;  // bytes of whole records (and the header) in the file
 };
 
+// What a journal file records: empty contents when there is no file. Throws JournalError as
+// parseJournal does, or when the file cannot be read.
+JournalContents readJournal(const std::filesystem::path& file, std::string_view identity, std::size_t items);
+
 // The journal of a resumable command: reads what a previous attempt recorded (when `resume`) and
 // opens the file for appending (a new file when not resuming or when there is none yet).
 struct Journal {

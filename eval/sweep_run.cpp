@@ -218,11 +218,6 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
   const auto say = [&](const std::string& line) {
     if (opt.progress) std::fprintf(stderr, "ambler: %s\n", line.c_str());
   };
-  say("sweep " + sweep.name + ": " + std::to_string(todo.size()) + " of " + std::to_string(total) + " runs" +
-      (opt.shard
-           ? " (shard " + std::to_string(opt.shard->index) + " of " + std::to_string(opt.shard->count) + ")"
-           : "") +
-      ", " + std::to_string(jobs) + (jobs == 1 ? " job" : " jobs") + " -> " + opt.out.string());
   createOutDir(opt.out / "runs");
 
   // The runs an earlier attempt finished (with --resume), then the journal open for this one's.
@@ -240,6 +235,11 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
   if (journal.done.records.size() != todo.size() - pending.size())
     throw JournalError(journal_file.string() + ": records runs that are not in this " +
                        (opt.shard ? "shard" : "sweep") + "; run without --resume to start over");
+  say("sweep " + sweep.name + ": " + std::to_string(todo.size()) + " of " + std::to_string(total) + " runs" +
+      (opt.shard
+           ? " (shard " + std::to_string(opt.shard->index) + " of " + std::to_string(opt.shard->count) + ")"
+           : "") +
+      ", " + std::to_string(jobs) + (jobs == 1 ? " job" : " jobs") + " -> " + opt.out.string());
   if (opt.resume)
     say("resuming: " + std::to_string(todo.size() - pending.size()) + " of " + std::to_string(todo.size()) +
         " runs recorded in " + journal_file.string() +

@@ -251,6 +251,15 @@ mkdir header && printf 'run,seed\n0,1\n' >header/results.shard-1-of-2.csv && pri
 expect_error merge_header_differs 'header/results\.shard-2-of-2\.csv: header differs from header/results\.shard-1-of-2\.csv.s' sweep ok.yaml --out header --merge
 mkdir quote && printf 'run,seed\n0,"1\n' >quote/results.shard-1-of-1.csv
 expect_error merge_not_a_csv 'quote/results\.shard-1-of-1\.csv: not a CSV file \(an open or stray quote\)' sweep ok.yaml --out quote --merge
+# ---- Resume journal (--resume)
+mkdir -p jnot/runs && printf 'run,seed\n0,1\n' >jnot/results.journal
+expect_error journal_not_a_journal 'jnot/results\.journal: not an ambler journal \(its first line is not "ambler-journal 1 <identity>"\); remove it or run without --resume' sweep ok.yaml --out jnot --resume
+mkdir -p jother/runs && printf 'ambler-journal 1 0000000000000000\n' >jother/results.journal
+expect_error journal_of_another_sweep 'jother/results\.journal: recorded for another sweep or basin, or with other options \(its identity differs\); run without --resume to start over, or give this one its own --out' sweep ok.yaml --out jother --resume
+"$ambler" sweep ok.yaml --out jref --quiet  # a real journal, for its header
+mkdir -p jbad/runs && { head -1 jref/results.journal; printf '0 00000000 []\n1 00000000 []\n'; } >jbad/results.journal
+expect_error journal_corrupt 'jbad/results\.journal: line 2: damaged record \(checksum mismatch\) followed by others; the journal is corrupt: run without --resume to start over' sweep ok.yaml --out jbad --resume
+expect_error merge_with_resume '--merge: merges the shards. files; --resume does not apply' sweep ok.yaml --out out --merge --resume
 mkdir short && printf 'run,seed\n0,1\n' >short/results.shard-1-of-1.csv
 expect_error merge_run_missing 'short: run 1 is missing' sweep ok.yaml --out short --merge
 mkdir twice && printf 'run,seed\n0,1\n1,2\n0,1\n' >twice/results.shard-1-of-1.csv

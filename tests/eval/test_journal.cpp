@@ -110,7 +110,7 @@ TEST(Journal, AJournalOfAnotherSweepOrNoneAtAllIsRefused) {
   test::TempDir tmp;
   const Written w = writeThree(tmp.path() / "j");
   EXPECT_NE(errorOf([&] { parseJournal(w.text, "dir/j", "id2", 8); })
-                .find("dir/j: recorded for another sweep or basin, or other options (identity id1, this one id2)"),
+                .find("dir/j: recorded for another sweep or basin, or with other options (its identity differs)"),
             std::string::npos);
   EXPECT_NE(errorOf([&] { parseJournal("run,seed\n0,1\n", "dir/j", "id1", 8); }).find("dir/j: not an ambler journal"),
             std::string::npos);
