@@ -4,6 +4,9 @@
 # Run it before any change to scripts/setup.sh, CMakeLists.txt's find_package calls or the
 # README's commands: the development machines carry packages a newcomer's lacks, so a green
 # build here proves nothing about theirs. Needs root, debootstrap and ../shared/tools.
+# On success it writes the dependencies' digest (scripts/deps-digest.sh) to .ci/fresh-checked:
+# commit it, and CI skips this check until setup.sh, build.sh, a CMakeLists.txt or the README
+# changes again.
 #   usage (from anywhere in the repository): bash scripts/fresh-check.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -25,3 +28,5 @@ bash "$fresh" "
   t2=\$(date +%s)
   echo \"fresh-check: demo command \$((t1 - t0)) s, test command \$((t2 - t1)) s (fresh Debian 12 minbase)\"
 "
+bash scripts/deps-digest.sh >.ci/fresh-checked
+echo "fresh-check: passed; .ci/fresh-checked updated (commit it)"
