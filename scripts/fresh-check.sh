@@ -5,8 +5,7 @@
 # README's commands: the development machines carry packages a newcomer's lacks, so a green
 # build here proves nothing about theirs. Needs root, debootstrap and ../shared/tools.
 # On success it writes the dependencies' digest (scripts/deps-digest.sh) to .ci/fresh-checked:
-# commit it, and CI skips this check until setup.sh, build.sh, a CMakeLists.txt or the README
-# changes again.
+# commit it, and CI skips this check until the dependencies change again.
 #   usage (from anywhere in the repository): bash scripts/fresh-check.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
