@@ -215,7 +215,7 @@ caption{text-align:left;font-weight:bold;padding:0.3em 0}
 th,td{border:1px solid #ccc;padding:0.2em 0.6em}
 td{text-align:right;font-variant-numeric:tabular-nums}
 tr>th:first-child{text-align:left;font-weight:normal;font-family:monospace}
-figure{display:inline-block;margin:0.5em;vertical-align:top}
+figure{display:inline-block;margin:0.5em;vertical-align:top;max-width:100%}
 img{max-width:100%;height:auto;border:1px solid #eee}
 figcaption{font-family:monospace;font-size:0.8em;color:#555}
 )";
