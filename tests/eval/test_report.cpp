@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -225,6 +226,21 @@ TEST(Report, NotARunDirectoryIsRefusedAndNothingIsWritten) {
     }
     EXPECT_FALSE(fs::exists(tmp.dir / "out"));
   }
+}
+
+// A metrics.json that is not JSON: one line naming the file, nothing written.
+TEST(Report, MetricsThatAreNotJsonAreRefusedNamingTheFile) {
+  test::TempDir tmp;
+  std::ofstream(tmp.dir / "metrics.json") << "{\"name\": ";
+  try {
+    writeRunReport(tmp.dir, tmp.dir / "report.html");
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind((tmp.dir / "metrics.json").string() + ": not JSON (", 0), 0u) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  EXPECT_FALSE(fs::exists(tmp.dir / "report.html"));
 }
 
 }  // namespace
