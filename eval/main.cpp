@@ -11,6 +11,7 @@
 #include "eval/bench.hpp"
 #include "eval/experiment.hpp"
 #include "eval/io.hpp"
+#include "eval/report.hpp"
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
 #include "eval/sweep.hpp"
@@ -77,6 +78,12 @@ int main(int argc, char** argv) {
   basin->add_flag("--quiet,-q", basin_quiet, "No progress lines on stderr");
   basin->add_flag("--resume", basin_opt.resume, "Keep the draws DIR's journal records as finished (a basin "
                                                 "killed before it ended); register only the rest");
+
+  std::string report_dir, report_out;
+  auto* report = app.add_subcommand("report", "Write one self-contained HTML report of a run directory: the scenario, "
+                                              "every picture embedded, the metrics as tables (see docs/report.md).");
+  report->add_option("dir", report_dir, "Run directory (as `ambler run` writes it)")->required();
+  report->add_option("--out,-o", report_out, "HTML file to write (default DIR/report.html)");
 
   auto* bench = app.add_subcommand("bench", "Measure speed; prints a table of medians.");
   bench->require_subcommand(1);
@@ -208,6 +215,11 @@ int main(int argc, char** argv) {
         mergeBasin(sc, basin_opt);
       else
         runBasin(sc, basin_opt);
+    } else if (*report) {
+      std::filesystem::path out = report_out.empty() ? std::filesystem::path(report_dir) / "report.html"
+                                                     : std::filesystem::path(report_out);
+      if (out.has_parent_path()) checkOutDir(out.parent_path());
+      writeRunReport(report_dir, out);
     } else if (*locus_vs_cartesian) {
       checkOutDir(exp_out);
       exp_opt.out = exp_out;

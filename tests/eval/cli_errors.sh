@@ -190,7 +190,7 @@ expect_error_after_start sweep_run_refused 'runfail\.yaml: run 1 \(views\.0\.xyz
 sweep ok.yaml 'axes: {seed: [1, 2]}\n'
 expect_error unknown_option 'The following argument was not expected: --colour' run base.yaml --out out --colour
 expect_error missing_required_option '--out is required' run base.yaml
-expect_error unknown_command 'walk: unknown command \(expected one of run, sweep, basin, bench, experiment; see --help\)' walk base.yaml
+expect_error unknown_command 'walk: unknown command \(expected one of run, sweep, basin, report, bench, experiment; see --help\)' walk base.yaml
 expect_error shard_malformed '--shard: expected K/N with 1 <= K <= N \(shard K of N, 1-based\), got "3/2"' sweep ok.yaml --out out --shard 3/2
 expect_error shard_too_many '--shard: 3/3: the sweep has 2 runs, so at most 2 shards' sweep ok.yaml --out out --shard 3/3
 expect_error keep_unknown '--keep: expected one of none, metrics, all, got "some"' sweep ok.yaml --out out --keep some
@@ -213,6 +213,9 @@ expect_error basin_merge_with_timing '--merge: merges the shards. files; --timin
 
 # ---- Experiments
 expect_error experiment_sweeps_missing 'nosweeps/tilt_noise\.yaml: cannot open file' experiment locus-vs-cartesian --out out --sweeps nosweeps --quiet
+
+# ---- Reports (adir: an empty directory, made above)
+expect_error report_not_a_run_directory 'adir: not a run directory \(no metrics\.json\)' report adir
 
 # ---- Output directories (--out): in the program's words, before any work
 printf 'a file\n' >afile

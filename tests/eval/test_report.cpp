@@ -1,0 +1,247 @@
+// `ambler report` of a run directory (docs/report.md) against ground truth: every PNG of the run
+// is embedded exactly once and decodes to the file's bytes, nothing points outside the file, a
+// section appears iff its stage ran, the tables show metrics.json's values, and the same run
+// directory gives the same bytes. Base64 against RFC 4648's test vectors.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "eval/report.hpp"
+#include "eval/runner.hpp"
+#include "eval/scenario.hpp"
+#include "test_support.hpp"
+
+namespace ambler::eval {
+namespace {
+
+namespace fs = std::filesystem;
+using test::slurp;
+
+// RFC 4648 §4 decoding, written apart from the encoder; throws on a character outside the alphabet.
+std::string base64Decode(const std::string& text) {
+  static const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  unsigned buffer = 0;
+  int bits = 0;
+  for (const char c : text) {
+    if (c == '=') break;
+    const size_t v = alphabet.find(c);
+    if (v == std::string::npos) throw std::runtime_error("not base64");
+    buffer = (buffer << 6) | unsigned(v);
+    bits += 6;
+    if (bits >= 8) {
+      bits -= 8;
+      out += char((buffer >> bits) & 0xFF);
+    }
+  }
+  return out;
+}
+
+std::size_t count(const std::string& haystack, const std::string& needle) {
+  std::size_t n = 0;
+  for (std::size_t at = haystack.find(needle); at != std::string::npos; at = haystack.find(needle, at + 1)) ++n;
+  return n;
+}
+
+std::string g4(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.4g", v);
+  return buf;
+}
+
+// The cells of the table row `metric` of the table captioned `caption`.
+std::vector<std::string> row(const std::string& html, const std::string& caption, const std::string& metric) {
+  const size_t table = html.find("<caption>" + caption + "</caption>");
+  if (table == std::string::npos) return {};
+  const size_t end = html.find("</table>", table);
+  const size_t at = html.find("<tr><th>" + metric + "</th>", table);
+  if (at == std::string::npos || at > end) return {};
+  const size_t row_end = html.find("</tr>", at);
+  const std::string r = html.substr(at, row_end - at);
+  std::vector<std::string> cells;
+  for (size_t td = r.find("<td>"); td != std::string::npos; td = r.find("<td>", td + 1))
+    cells.push_back(r.substr(td + 4, r.find("</td>", td) - td - 4));
+  return cells;
+}
+
+// Two views of Mars-like ground, mapped, small enough to run in seconds; `extra` adds stages.
+std::string scenario(const std::string& name, const std::string& extra) {
+  return "name: " + name + R"(
+seed: 3
+terrain:
+  kind: mars
+  size_m: [8, 8]
+  cell_m: 0.1
+  rocks: {abundance_k: 0.05, min_diameter_m: 0.15, max_diameter_m: 0.6}
+sensor: {rows: 32, cols: 128}
+views:
+  - {xyz_m: [0, -3.5, 2.0], rpy_deg: [0, -30, 0]}
+  - {xyz_m: [0.3, -3.3, 2.0], rpy_deg: [0, -30, 4]}
+map:
+  cell_m: 0.10
+  region: {x_m: [-2, 2], y_m: [-2, 3]}
+)" + extra;
+}
+
+// Every PNG under `dir`, as paths relative to it.
+std::vector<fs::path> pngs(const fs::path& dir) {
+  std::vector<fs::path> out;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file() && e.path().extension() == ".png") out.push_back(fs::relative(e.path(), dir));
+  return out;
+}
+
+void checkEmbedsEveryPictureOnceAndNothingOutside(const fs::path& run, const std::string& html) {
+  const auto files = pngs(run);
+  ASSERT_FALSE(files.empty());
+  // Every data URI, decoded; each PNG's bytes appear exactly once among them.
+  std::vector<std::string> decoded;
+  const std::string prefix = "src=\"data:image/png;base64,";  // (std::regex recurses per character)
+  for (size_t at = html.find(prefix); at != std::string::npos; at = html.find(prefix, at + 1)) {
+    const size_t begin = at + prefix.size(), end = html.find('"', begin);
+    ASSERT_NE(end, std::string::npos);
+    decoded.push_back(base64Decode(html.substr(begin, end - begin)));
+  }
+  EXPECT_EQ(decoded.size(), files.size());
+  for (const fs::path& f : files) {
+    const std::string bytes = slurp(run / f);
+    EXPECT_EQ(std::count(decoded.begin(), decoded.end(), bytes), 1) << f;
+    EXPECT_EQ(count(html, "<figcaption>" + f.generic_string() + "</figcaption>"), 1u) << f;
+  }
+  // Nothing from the network or another file.
+  EXPECT_EQ(html.find("http://"), std::string::npos);
+  EXPECT_EQ(html.find("https://"), std::string::npos);
+  EXPECT_EQ(count(html, "src=\""), count(html, "src=\"data:"));
+  EXPECT_EQ(html.find("<script"), std::string::npos);
+  EXPECT_EQ(html.find("<link"), std::string::npos);
+  EXPECT_EQ(html.find("url("), std::string::npos);
+}
+
+bool hasSection(const std::string& html, const std::string& id) {
+  return html.find("<h2 id=\"" + id + "\">") != std::string::npos;
+}
+
+TEST(Report, Base64MatchesRfc4648TestVectors) {
+  const std::map<std::string, std::string> vectors = {{"", ""},         {"f", "Zg=="},         {"fo", "Zm8="},
+                                                      {"foo", "Zm9v"},  {"foob", "Zm9vYg=="},   {"fooba", "Zm9vYmE="},
+                                                      {"foobar", "Zm9vYmFy"}};
+  for (const auto& [in, out] : vectors) EXPECT_EQ(base64Encode(in), out) << '"' << in << '"';
+  // Every byte value survives.
+  std::string all;
+  for (int b = 0; b < 256; ++b) all += char(b);
+  EXPECT_EQ(base64Decode(base64Encode(all)), all);
+}
+
+TEST(Report, HtmlEscapeEscapesMarkup) {
+  EXPECT_EQ(htmlEscape("a<b>&\"c'"), "a&lt;b&gt;&amp;&quot;c&#39;");
+}
+
+// A run with map only: World, Scans and Maps, no Matching, Footfalls or Leg; every picture once;
+// the values of metrics.json; the scenario escaped in a <pre>; the same bytes twice.
+TEST(Report, MapRunHasItsStagesOnlyAndEveryPicture) {
+  test::TempDir tmp;
+  const fs::path run = tmp.dir / "run";
+  const auto metrics = runScenario(parseScenario(scenario("report_map", ""), "inline.yaml"), {run, false});
+  const fs::path out = writeRunReport(run, tmp.dir / "a.html");
+  EXPECT_EQ(out, tmp.dir / "a.html");
+  const std::string html = slurp(out);
+  checkEmbedsEveryPictureOnceAndNothingOutside(run, html);
+
+  for (const char* id : {"scenario", "run", "world", "scans", "maps"}) EXPECT_TRUE(hasSection(html, id)) << id;
+  for (const char* id : {"matching", "footfalls", "leg", "other"}) EXPECT_FALSE(hasSection(html, id)) << id;
+
+  // The scenario as written, escaped.
+  EXPECT_NE(html.find("<pre>" + htmlEscape(slurp(run / "scenario.resolved.yaml")) + "</pre>"), std::string::npos);
+
+  // Tables: one column per view, metrics.json's values to 4 significant digits.
+  ASSERT_EQ(metrics["map"].size(), 2u);
+  std::vector<std::string> coverage, rms;
+  for (const auto& m : metrics["map"]) {
+    coverage.push_back(g4(m["coverage"].get<double>()));
+    rms.push_back(m["rms_error_m"].is_null() ? "\xE2\x80\x94" : g4(m["rms_error_m"].get<double>()));
+  }
+  EXPECT_EQ(row(html, "map", "coverage"), coverage);
+  EXPECT_EQ(row(html, "map", "rms_error_m"), rms);
+  EXPECT_EQ(row(html, "scan", "valid_fraction"),
+            (std::vector<std::string>{g4(metrics["scan"][0]["valid_fraction"].get<double>()),
+                                      g4(metrics["scan"][1]["valid_fraction"].get<double>())}));
+  EXPECT_NE(html.find("<th>view 0</th><th>view 1</th>"), std::string::npos);
+
+  // Deterministic: a second write is the same bytes, and the default name is not among the inputs.
+  writeRunReport(run, tmp.dir / "b.html");
+  EXPECT_EQ(slurp(tmp.dir / "b.html"), html);
+  writeRunReport(run, run / "report.html");
+  EXPECT_EQ(slurp(run / "report.html"), html);
+  EXPECT_EQ(runReportHtml(run), html);
+}
+
+// With matching, footfalls and the leg: their sections appear, with the registration values.
+TEST(Report, MatchingFootfallAndLegRunHasThoseSections) {
+  test::TempDir tmp;
+  const fs::path run = tmp.dir / "run";
+  const auto metrics = runScenario(
+      parseScenario(scenario("report_all", R"(matching:
+  methods: [iconic_lm]
+  initial_error: {xyz_m: [0.1, -0.1, 0.0], rpy_deg: [0, 0, 2]}
+footfall: {map: view_0, region: {x_m: [-0.5, 0.5], y_m: [0.5, 1.5]}, methods: [max_min, equilibrium]}
+leg: {soil: rock}
+)"),
+                    "inline.yaml"),
+      {run, false});
+  const std::string html = slurp(writeRunReport(run, tmp.dir / "r.html"));
+  checkEmbedsEveryPictureOnceAndNothingOutside(run, html);
+  for (const char* id : {"scenario", "world", "scans", "maps", "matching", "footfalls", "leg"})
+    EXPECT_TRUE(hasSection(html, id)) << id;
+  const auto& reg = metrics["registration"][0];
+  EXPECT_EQ(row(html, "registration", "translation_error_m"),
+            std::vector<std::string>{g4(reg["translation_error_m"].get<double>())});
+  EXPECT_EQ(row(html, "registration", "success"),
+            std::vector<std::string>{reg["success"].get<bool>() ? "true" : "false"});
+  EXPECT_NE(html.find("<th>pair 0\xE2\x80\x93" "1 iconic_lm</th>"), std::string::npos);
+  ASSERT_EQ(metrics["footfall"].size(), 2u);
+  EXPECT_EQ(row(html, "footfall", "score"),
+            (std::vector<std::string>{g4(metrics["footfall"][0]["score"].get<double>()),
+                                      g4(metrics["footfall"][1]["score"].get<double>())}));
+  EXPECT_EQ(row(html, "leg", "tilt_deg"),
+            (std::vector<std::string>{g4(metrics["footfall"][0]["leg"]["tilt_deg"].get<double>()),
+                                      g4(metrics["footfall"][1]["leg"]["tilt_deg"].get<double>())}));
+  EXPECT_EQ(slurp(writeRunReport(run, tmp.dir / "r2.html")), html);
+}
+
+TEST(Report, NotARunDirectoryIsRefusedAndNothingIsWritten) {
+  test::TempDir tmp;
+  for (const fs::path& dir : {tmp.dir / "missing", tmp.dir / "empty"}) {
+    if (dir.filename() == "empty") fs::create_directories(dir);
+    try {
+      writeRunReport(dir, tmp.dir / "out" / "report.html");
+      ADD_FAILURE() << "no error for " << dir;
+    } catch (const std::runtime_error& e) {
+      EXPECT_EQ(std::string(e.what()), dir.string() + ": not a run directory (no metrics.json)");
+    }
+    EXPECT_FALSE(fs::exists(tmp.dir / "out"));
+  }
+}
+
+// A metrics.json that is not JSON: one line naming the file, nothing written.
+TEST(Report, MetricsThatAreNotJsonAreRefusedNamingTheFile) {
+  test::TempDir tmp;
+  std::ofstream(tmp.dir / "metrics.json") << "{\"name\": ";
+  try {
+    writeRunReport(tmp.dir, tmp.dir / "report.html");
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind((tmp.dir / "metrics.json").string() + ": not JSON (", 0), 0u) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+  }
+  EXPECT_FALSE(fs::exists(tmp.dir / "report.html"));
+}
+
+}  // namespace
+}  // namespace ambler::eval
