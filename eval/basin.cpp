@@ -310,18 +310,11 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   const bool resuming = opt.resume && fs::exists(journal_file);
   const JournalContents done = opt.resume ? readJournal(journal_file, identity, drawCount(g)) : JournalContents{};
   std::vector<Rows> rows(todo.size());
-  std::vector<std::size_t> pending;  // indices into todo
-  for (std::size_t i = 0; i < todo.size(); ++i) {
-    const auto it = done.records.find(todo[i]);
-    if (it == done.records.end()) {
-      pending.push_back(i);
-    } else {
-      rows[i] = rowsFromPayload(it->second, journal_file, todo[i], spec.methods.size());
-    }
-  }
-  if (done.records.size() != todo.size() - pending.size())
-    throw JournalError(journal_file.string() + ": records draws that are not in this " +
-                       (opt.shard ? "shard" : "basin") + "; run without --resume to start over");
+  const std::vector<std::size_t> pending =  // indices into todo
+      unrecordedItems(done, todo, journal_file, "draws", opt.shard ? "shard" : "basin",
+                      [&](std::size_t i, const std::string& payload) {
+                        rows[i] = rowsFromPayload(payload, journal_file, todo[i], spec.methods.size());
+                      });
   say("basin " + sc.name + ": views " + std::to_string(pi) + "-" + std::to_string(pj) + ", " +
       std::to_string(g.translation_m.size()) + " translations x " + std::to_string(g.rotation_deg.size()) +
       " rotations x " + std::to_string(g.trials) + " trials, " + std::to_string(todo.size()) + " of " +

@@ -173,6 +173,25 @@ void JournalWriter::append(std::size_t item, std::string_view payload) {
   writeAll(std::to_string(item) + " " + hex(crc32(payload), 8) + " " + std::string(payload) + "\n");
 }
 
+std::vector<std::size_t> unrecordedItems(const JournalContents& done, const std::vector<std::size_t>& todo,
+                                         const std::filesystem::path& file, const std::string& items,
+                                         const std::string& scope,
+                                         const std::function<void(std::size_t, const std::string&)>& recorded) {
+  std::vector<std::size_t> pending;
+  for (std::size_t i = 0; i < todo.size(); ++i) {
+    const auto it = done.records.find(todo[i]);
+    if (it == done.records.end()) {
+      pending.push_back(i);
+    } else {
+      recorded(i, it->second);
+    }
+  }
+  if (done.records.size() != todo.size() - pending.size())
+    throw JournalError(file.string() + ": records " + items + " that are not in this " + scope +
+                       "; run without --resume to start over");
+  return pending;
+}
+
 JournalContents readJournal(const std::filesystem::path& file, std::string_view identity, std::size_t items) {
   if (!std::filesystem::exists(file)) return {};
   std::ifstream in(file, std::ios::binary);

@@ -13,11 +13,13 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace ambler::eval {
 
@@ -67,6 +69,15 @@ class JournalWriter {
   int fd_ = -1;
   std::size_t size_ = 0;  // bytes of whole records (and the header) in the file
 };
+
+// Splits a command's items (`todo`, item numbers) by what `done` records: calls `recorded(i,
+// payload)` for each index i of todo whose item is recorded and returns the other indices, in
+// order. Throws JournalError naming `file` when `done` records an item outside todo ("records
+// <items> that are not in this <scope>").
+std::vector<std::size_t> unrecordedItems(const JournalContents& done, const std::vector<std::size_t>& todo,
+                                         const std::filesystem::path& file, const std::string& items,
+                                         const std::string& scope,
+                                         const std::function<void(std::size_t, const std::string&)>& recorded);
 
 // What a journal file records: empty contents when there is no file. Throws JournalError as
 // parseJournal does, or when the file cannot be read.

@@ -223,18 +223,11 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
   // The runs an earlier attempt finished (with --resume), then the journal open for this one's.
   Journal journal = openJournal(journal_file, journalIdentity(sweep, opt, todo), total, opt.resume);
   std::vector<Row> rows(todo.size());
-  std::vector<std::size_t> pending;  // indices into todo
-  for (std::size_t i = 0; i < todo.size(); ++i) {
-    const auto it = journal.done.records.find(todo[i]);
-    if (it == journal.done.records.end()) {
-      pending.push_back(i);
-    } else {
-      rows[i] = rowFromPayload(it->second, journal_file, todo[i]);
-    }
-  }
-  if (journal.done.records.size() != todo.size() - pending.size())
-    throw JournalError(journal_file.string() + ": records runs that are not in this " +
-                       (opt.shard ? "shard" : "sweep") + "; run without --resume to start over");
+  const std::vector<std::size_t> pending =  // indices into todo
+      unrecordedItems(journal.done, todo, journal_file, "runs", opt.shard ? "shard" : "sweep",
+                      [&](std::size_t i, const std::string& payload) {
+                        rows[i] = rowFromPayload(payload, journal_file, todo[i]);
+                      });
   say("sweep " + sweep.name + ": " + std::to_string(todo.size()) + " of " + std::to_string(total) + " runs" +
       (opt.shard
            ? " (shard " + std::to_string(opt.shard->index) + " of " + std::to_string(opt.shard->count) + ")"
