@@ -188,12 +188,12 @@ void checkTruth(const ElevationMap& map, const ElevationMap* truth) {
 }  // namespace
 
 void writeMapFiles(const std::filesystem::path& dir, const std::string& stem, const ElevationMap& map,
-                   const ElevationMap* truth, const std::string& title) {
+                   const ElevationMap* truth, const std::string& title, const GeoFrame& geo) {
   checkTruth(map, truth);
   const auto& g = map.grid();
-  writeTiff(dir / (stem + "_elevation.tiff"), map.elevation());
-  writeTiff(dir / (stem + "_sigma.tiff"), map.sigma());
-  writeTiff(dir / (stem + "_shadow_ceiling.tiff"), map.shadowCeiling());
+  writeGeoTiff(dir / (stem + "_elevation.tiff"), map.elevation(), g, geo);
+  writeGeoTiff(dir / (stem + "_sigma.tiff"), map.sigma(), g, geo);
+  writeGeoTiff(dir / (stem + "_shadow_ceiling.tiff"), map.shadowCeiling(), g, geo);
   const cv::Mat state(g.rows, g.cols, CV_8UC1, const_cast<std::uint8_t*>(map.state().data()));
   writePng(dir / (stem + "_state.png"), state);
   nlohmann::ordered_json meta;
@@ -215,9 +215,9 @@ void writeMapFiles(const std::filesystem::path& dir, const std::string& stem, co
 }
 
 void writeCartesianFiles(const std::filesystem::path& dir, const std::string& stem, const ElevationMap& map,
-                         const ElevationMap* truth, const std::string& title) {
+                         const ElevationMap* truth, const std::string& title, const GeoFrame& geo) {
   checkTruth(map, truth);
-  writeTiff(dir / (stem + "_cartesian_elevation.tiff"), map.elevation());
+  writeGeoTiff(dir / (stem + "_cartesian_elevation.tiff"), map.elevation(), map.grid(), geo);
   if (truth) writePng(dir / (stem + "_cartesian_error.png"), errorPicture(map, *truth, title));
 }
 

@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <string>
 
+#include "eval/geotiff.hpp"
 #include "perception/elevation_map.hpp"
 #include "sim/ground_truth.hpp"
 
@@ -17,16 +18,17 @@ namespace ambler::eval {
 //                                               "frame": {"origin_m", "yaw_deg"}}
 //   <stem>_elevation.png, <stem>_sigma.png, <stem>_state_view.png, and, when `truth` is given
 //   (on the map's grid), <stem>_error.png.
-// Every raster is north-up (row 0 is the cell row of largest y of the map frame). Throws std::runtime_error naming
+// Every raster is north-up (row 0 is the cell row of largest y of the map frame), and every .tiff is
+// a GeoTIFF placed by its geotransform in `geo` (eval/geotiff.hpp). Throws std::runtime_error naming
 // the file that cannot be written, std::invalid_argument when `truth` is not on the map's grid.
 void writeMapFiles(const std::filesystem::path& dir, const std::string& stem,
                    const perception::ElevationMap& map, const perception::ElevationMap* truth,
-                   const std::string& title);
+                   const std::string& title, const GeoFrame& geo = {});
 
 // The Cartesian baseline: <stem>_cartesian_elevation.tiff and, when `truth` is given,
 // <stem>_cartesian_error.png. Throws like writeMapFiles.
 void writeCartesianFiles(const std::filesystem::path& dir, const std::string& stem,
                          const perception::ElevationMap& map, const perception::ElevationMap* truth,
-                         const std::string& title);
+                         const std::string& title, const GeoFrame& geo = {});
 
 }  // namespace ambler::eval

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "eval/geotiff.hpp"
 #include "eval/scenario.hpp"
 #include "perception/elevation_map.hpp"
 #include "perception/registration.hpp"
@@ -64,6 +65,7 @@ struct RunState {
   bool progress = true;
 
   std::optional<sim::World> world;  // world stage
+  GeoFrame geo;                     // world stage: the CRS of map rasters (a DEM's, or a local frame)
   std::filesystem::path world_xml;  // world stage: the world's MJCF in the run directory
   std::unique_ptr<sim::RayScene> scene;
   std::unique_ptr<sim::GroundTruth> truth;

@@ -15,6 +15,9 @@ packages=(
   clang libclang-rt-dev             # scripts/fuzz.sh: clang++ 14 and its libFuzzer/ASan/UBSan runtimes
   slurmctld slurmd slurm-client munge  # tests/cluster/slurm.sh: a one-node Slurm cluster (no daemon is started)
   parallel                          # tests/cluster/parallel.sh: GNU parallel
+  libgdal-dev gdal-bin              # terrain.kind: dem (GeoTIFF in), GeoTIFF map rasters out, gdalinfo in tests
+  gnuplot-nox fonts-dejavu-core     # the charts of figures and reports (eval/plot.cpp runs gnuplot)
+  chromium                          # tests/eval/report_chromium.sh: the report as a browser renders it
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -38,7 +38,7 @@ void run(RunState& s) {
     j["gap_fill"] = best_fill;
     s.metrics["map_cartesian"].push_back(j);
     writeCartesianFiles(s.out / "maps", viewName(k), *best, &*view.truth,
-                        sc.name + ": " + viewName(k) + " Cartesian baseline");
+                        sc.name + ": " + viewName(k) + " Cartesian baseline", s.geo);
     char line[200];
     std::snprintf(line, sizeof line, "cartesian %s: coverage %.1f%%, RMS error %.4f m (%s gap filling)",
                   viewName(k).c_str(), 100 * best_m->coverage, best_m->rms_error_m, best_fill.c_str());

@@ -106,7 +106,7 @@ void run(RunState& s) {
     j["truth_score"] = jsonNumber(choice.truth_score);
     j["truth_percentile"] = jsonNumber(choice.truth_percentile);
     writeJson(s.out / "footfall" / (name + ".json"), j);
-    writeTiff(s.out / "footfall" / (name + "_score.tiff"), scores[m].score);
+    writeGeoTiff(s.out / "footfall" / (name + "_score.tiff"), scores[m].score, grid, s.geo);
     s.metrics["footfall"].push_back(j);
     char line[200];
     std::snprintf(line, sizeof line, "footfall  %-21s (%.2f, %.2f) m on %s, score %.4g, true percentile %s", name.c_str(),

@@ -42,7 +42,7 @@ void run(RunState& s) {
         if (const auto rest = sim::restingDisk(heights, grid.cell, x0, y0, xy.x(), xy.y(), config.foot_diameter_m))
           tilt(r, c) = float(rest->tilt_deg);
       }
-    writeTiff(s.out / "leg" / "predicted_tilt.tiff", tilt);
+    writeGeoTiff(s.out / "leg" / "predicted_tilt.tiff", tilt, grid, s.geo);
   }
   for (std::size_t k = 0; k < s.choices.size(); ++k) {
     const FootfallChoice& c = s.choices[k];

@@ -30,7 +30,7 @@ void run(RunState& s) {
     const MapMetrics m = mapMetrics(view.locus->map, *view.truth, *view.visibility, &sensor_position);
     s.metrics["map"].push_back(toJson(m, k));
     writeMapFiles(s.out / "maps", viewName(k), view.locus->map, &*view.truth,
-                  sc.name + ": " + viewName(k) + " locus map");
+                  sc.name + ": " + viewName(k) + " locus map", s.geo);
     char line[200];
     std::snprintf(line, sizeof line,
                   "map       %s: %dx%d cells of %.2f m, coverage %.1f%%, RMS error %.4f m, shadow P/R %.2f/%.2f, "

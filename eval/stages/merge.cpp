@@ -105,7 +105,8 @@ void run(RunState& s) {
   s.metrics["composite"] = compositeJson(m, int(s.views.size()), mergePosesName(spec.poses));
   writeMapFiles(s.out / "maps", "composite", composite, &truth,
                 sc.name + ": composite of " + std::to_string(s.views.size()) + " views (" + mergePosesName(spec.poses) +
-                    " poses)");
+                    " poses)",
+                s.geo);
   char line[200];
   std::snprintf(line, sizeof line, "merge     composite of %d views (%s poses): coverage %.1f%%, RMS error %.4f m, within 1σ %.0f%%",
                 int(s.views.size()), mergePosesName(spec.poses), 100 * m.coverage, m.rms_error_m, 100 * m.within_1sigma);
