@@ -239,7 +239,6 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
     if (opt.progress) std::fprintf(stderr, "ambler: %s\n", line.c_str());
   };
   createOutDir(opt.out / "runs");
-  writeText(opt.out / "sweep.resolved.yaml", sweepSpecText(sweep));
 
   // The runs an earlier attempt finished (with --resume), then the journal open for this one's.
   Journal journal = openJournal(journal_file, journalIdentity(sweep, opt, todo), total, opt.resume);
@@ -249,6 +248,7 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
                       [&](std::size_t i, const std::string& payload) {
                         rows[i] = rowFromPayload(payload, journal_file, todo[i]);
                       });
+  writeText(opt.out / "sweep.resolved.yaml", sweepSpecText(sweep));  // once the journal is accepted
   say("sweep " + sweep.name + ": " + std::to_string(todo.size()) + " of " + std::to_string(total) + " runs" +
       (opt.shard
            ? " (shard " + std::to_string(opt.shard->index) + " of " + std::to_string(opt.shard->count) + ")"
