@@ -23,6 +23,7 @@ std::string g4(double v);
 struct Table {
   std::string caption;
   std::string corner = "metric";                                       // the first column's heading
+  std::string css_class;                                               // "text": cells left-aligned
   std::vector<std::string> columns;                                    // entry labels
   std::vector<std::pair<std::string, std::vector<std::string>>> rows;  // name, one cell per column (HTML)
 };

@@ -232,6 +232,7 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
   Table goals_table;
   goals_table.caption = "runs meeting the goals the docs state";
   goals_table.corner = "column";
+  goals_table.css_class = "text";
   goals_table.columns = {"runs passing", "goal", "stated in"};
   for (const Metric& m : metrics) {
     const std::string& col = header[m.column];
@@ -253,32 +254,18 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
 
   if (!spec_text.empty()) html += "<a href=\"#sweep\">Sweep</a>";
   if (!goals_table.rows.empty()) html += "<a href=\"#goals\">Goals</a>";
-  if (!metrics.empty()) html += "<a href=\"#metrics\">Metrics</a>";
   if (!plots.empty()) html += "<a href=\"#plots\">Plots</a>";
   if (worst_by) html += "<a href=\"#worst\">Worst runs</a>";
+  if (!metrics.empty()) html += "<a href=\"#metrics\">Metrics</a>";
   html += "</nav>\n";
   if (!spec_text.empty()) html += "<h2 id=\"sweep\">Sweep</h2>\n<pre>" + htmlEscape(spec_text) + "</pre>\n";
   if (!goals_table.rows.empty())
     html += "<h2 id=\"goals\">Goals</h2>\n<p>Per results.csv column with a goal the docs state, the runs "
             "that meet it (docs/report.md, \"Goals\").</p>\n" + tableHtml(goals_table);
-  if (!metrics.empty()) {
-    Table t;
-    t.caption = "each numeric metric over the runs";
-    t.columns = {"least", "median", "greatest", "runs with a value"};
-    for (const Metric& m : metrics) {
-      std::vector<double> v;
-      for (double x : m.v)
-        if (std::isfinite(x)) v.push_back(x);
-      t.rows.push_back({header[m.column],
-                        {g4(*std::min_element(v.begin(), v.end())), g4(median(v)),
-                         g4(*std::max_element(v.begin(), v.end())), std::to_string(v.size())}});
-    }
-    html += "<h2 id=\"metrics\">Metrics</h2>\n" + tableHtml(t);
-  }
   if (!plots.empty()) {
     html += "<h2 id=\"plots\">Plots</h2>\n<p>Each metric that varies against each axis with more than one value "
-            "(drawn by gnuplot). Where several runs share an axis value (the other axes vary), the line is their "
-            "median and the thin lines their least and greatest value.</p>\n";
+            "(drawn by gnuplot). Where several runs share an axis value (the other axes vary), the line with "
+            "dots is their median and the two other lines their least and greatest value.</p>\n";
     for (const Plot& p : plots) html += figureBytesHtml(p.png, p.caption);
   }
   if (worst_by) {
@@ -326,6 +313,20 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
       h += "</tr>\n";
     }
     html += h + "</table>\n";
+  }
+  if (!metrics.empty()) {
+    Table t;
+    t.caption = "each numeric metric over the runs";
+    t.columns = {"least", "median", "greatest", "runs with a value"};
+    for (const Metric& m : metrics) {
+      std::vector<double> v;
+      for (double x : m.v)
+        if (std::isfinite(x)) v.push_back(x);
+      t.rows.push_back({header[m.column],
+                        {g4(*std::min_element(v.begin(), v.end())), g4(median(v)),
+                         g4(*std::max_element(v.begin(), v.end())), std::to_string(v.size())}});
+    }
+    html += "<h2 id=\"metrics\">Metrics</h2>\n" + tableHtml(t);
   }
   return html + pageTail();
 }
@@ -446,6 +447,7 @@ std::string basinReportHtml(const fs::path& dir) {
   Table goal;
   goal.caption = "cells with \xE2\x89\xA5 95 % success";
   goal.corner = "method";
+  goal.css_class = "text";
   goal.columns = {"cells", "successes", "every cell \xE2\x89\xA5 95 %"};
   for (const std::string& m : methods) {
     Table t;

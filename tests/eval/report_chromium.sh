@@ -56,17 +56,18 @@ check_page() {
   [[ $bad == 0 ]] && echo "ok   $name: $images images loaded, 0 broken, no console message, screenshot $size bytes"
 }
 
-# The control: a page with one good and one broken image (bytes that are not a PNG) and one from
-# the network must count two broken.
+# The control: a page with one good and one broken image (bytes that are not a PNG), one from the
+# network and a console.error must count two broken and log the message.
 good=$(base64 -w0 <"$src/docs/experiments/basin/rocks_boundary.png")
-printf '<!DOCTYPE html><html><body><img src="data:image/png;base64,%s"><img src="data:image/png;base64,AAAA"><img src="http://example.com/x.png"></body></html>\n' \
+printf '<!DOCTYPE html><html><body><img src="data:image/png;base64,%s"><img src="data:image/png;base64,AAAA"><img src="http://example.com/x.png"><script>console.error("control")</script></body></html>\n' \
   "$good" >"$tmp/control.html"
 checked_copy "$tmp/control.html" "$tmp/control.check.html"
 browse --dump-dom "$tmp/control.check.html" >"$tmp/control.dom"
-if grep -q 'data-broken="2"' "$tmp/control.dom" && grep -q 'data-images="3"' "$tmp/control.dom"; then
-  echo "ok   control: a broken and an offline image are seen as broken"
+if grep -q 'data-broken="2"' "$tmp/control.dom" && grep -q 'data-images="3"' "$tmp/control.dom" &&
+  grep -q 'CONSOLE.*control' "$tmp/chromium.err"; then
+  echo "ok   control: a broken and an offline image are seen as broken, a console message is seen"
 else
-  echo "FAIL control: the checker did not see 2 broken of 3 images: $(grep -o 'data-[a-z]*="[0-9]*"' "$tmp/control.dom" | tr '\n' ' ')"
+  echo "FAIL control: expected 2 broken of 3 images and a console message; got $(grep -o 'data-[a-z]*="[0-9]*"' "$tmp/control.dom" | tr '\n' ' ')$(grep -c CONSOLE "$tmp/chromium.err") console lines"
   fail=1
 fi
 
