@@ -7,9 +7,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <string>
 #include <thread>
+#include <unistd.h>
 #include <vector>
 #include <opencv2/imgproc.hpp>
 
@@ -287,6 +289,30 @@ TEST(RenderPlot, MissingGnuplotIsOneClearLine) {
   }
   ::setenv("PATH", path.c_str(), 1);
   EXPECT_EQ(what, "gnuplot not found: install gnuplot-nox (scripts/setup.sh)");
+}
+
+// gnuplot failing: one line with its exit status and its message (the last line it printed; a
+// real gnuplot's is '"plot.gp" line 3: undefined variable: foo', after the command and a caret).
+TEST(RenderPlot, FailingGnuplotIsOneLineWithItsMessage) {
+  const std::string path = std::getenv("PATH") ? std::getenv("PATH") : "";
+  const auto dir = std::filesystem::temp_directory_path() / ("ambler-test-failing-gnuplot-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  {
+    std::ofstream fake(dir / "gnuplot");
+    fake << "#!/bin/sh\necho >&2\necho 'plot foo' >&2\necho '     ^' >&2\n"
+            "echo '\"plot.gp\" line 3: undefined variable: foo' >&2\nexit 1\n";
+  }
+  std::filesystem::permissions(dir / "gnuplot", std::filesystem::perms::owner_all);
+  ::setenv("PATH", (dir.string() + ":" + path).c_str(), 1);
+  std::string what;
+  try {
+    renderPlot(sampleSpec(false), 400, 300);
+  } catch (const std::runtime_error& e) {
+    what = e.what();
+  }
+  ::setenv("PATH", path.c_str(), 1);
+  std::filesystem::remove_all(dir);
+  EXPECT_EQ(what, "gnuplot failed (exit 1): \"plot.gp\" line 3: undefined variable: foo");
 }
 
 }  // namespace
