@@ -162,12 +162,17 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
     std::size_t column;
     std::vector<std::string> values;
     bool numeric = true;
+    std::vector<std::size_t> of_run;  // the index of each run's value
   };
   std::vector<Axis> axes;
   for (std::size_t c = 1; c <= n_axes; ++c) {
-    Axis a{c, {}, true};
-    for (std::size_t r = 1; r < rows.size(); ++r)
-      if (std::find(a.values.begin(), a.values.end(), rows[r][c]) == a.values.end()) a.values.push_back(rows[r][c]);
+    Axis a{c, {}, true, {}};
+    std::map<std::string, std::size_t> index;
+    for (std::size_t r = 1; r < rows.size(); ++r) {
+      const auto [it, added] = index.emplace(rows[r][c], a.values.size());
+      if (added) a.values.push_back(rows[r][c]);
+      a.of_run.push_back(it->second);
+    }
     for (const auto& v : a.values) a.numeric = a.numeric && number(v) && std::isfinite(*number(v));
     if (a.values.size() > 1) axes.push_back(std::move(a));
   }
@@ -193,10 +198,11 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
           hi{"greatest", {}, {}, plotColour(3), false, true};
       double x_min = HUGE_VAL, x_max = -HUGE_VAL, y_min = HUGE_VAL, y_max = -HUGE_VAL;
       std::size_t per_value = 0;
+      std::vector<std::vector<double>> at_value(a.values.size());
+      for (std::size_t r = 0; r < n_runs; ++r)
+        if (std::isfinite(m.v[r])) at_value[a.of_run[r]].push_back(m.v[r]);
       for (std::size_t i = 0; i < a.values.size(); ++i) {
-        std::vector<double> at;
-        for (std::size_t r = 1; r < rows.size(); ++r)
-          if (rows[r][a.column] == a.values[i] && std::isfinite(m.v[r - 1])) at.push_back(m.v[r - 1]);
+        const std::vector<double>& at = at_value[i];
         per_value = std::max(per_value, at.size());
         const double x = a.numeric ? *number(a.values[i]) : double(i);
         x_min = std::min(x_min, x), x_max = std::max(x_max, x);
