@@ -1,3 +1,7 @@
+// Plots by gnuplot (docs/report.md, "Plots: gnuplot"): the layout (axis ranges from niceTicks and
+// logTicks, fixed pixel margins, the legend's corner) is decided here, so it is the same for every
+// gnuplot version and testable; gnuplot draws. Each plot runs one `gnuplot` child process on a
+// script in its own temporary directory, so plots on several threads never share a file.
 #include "eval/plot.hpp"
 
 #include <fcntl.h>
