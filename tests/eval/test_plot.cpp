@@ -13,6 +13,7 @@
 #include <thread>
 #include <unistd.h>
 #include <vector>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "eval/io.hpp"
@@ -289,6 +290,26 @@ TEST(RenderPlot, MissingGnuplotIsOneClearLine) {
   }
   ::setenv("PATH", path.c_str(), 1);
   EXPECT_EQ(what, "gnuplot not found: install gnuplot-nox (scripts/setup.sh)");
+}
+
+// AMBLER_KEEP_PLOTS=DIR keeps each plot's script, which re-renders the same picture on its own.
+TEST(RenderPlot, KeptScriptReRendersThePlot) {
+  const auto dir = std::filesystem::temp_directory_path() / ("ambler-test-kept-plots-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  ::setenv("AMBLER_KEEP_PLOTS", dir.c_str(), 1);
+  const cv::Mat img = renderPlot(sampleSpec(true), 500, 300);
+  ::unsetenv("AMBLER_KEEP_PLOTS");
+  std::vector<std::filesystem::path> scripts;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) scripts.push_back(e.path());
+  ASSERT_EQ(scripts.size(), 1u);
+  EXPECT_EQ(scripts[0].extension(), ".gp");
+  const std::string command = "cd '" + dir.string() + "' && gnuplot -d '" + scripts[0].filename().string() + "'";
+  ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  auto png = scripts[0];
+  const cv::Mat again = cv::imread(png.replace_extension(".png").string(), cv::IMREAD_COLOR);
+  ASSERT_EQ(again.size(), img.size());
+  EXPECT_EQ(cv::norm(again, img, cv::NORM_INF), 0);
+  std::filesystem::remove_all(dir);
 }
 
 // gnuplot failing: one line with its exit status and its message (the last line it printed; a
