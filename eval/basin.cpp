@@ -327,6 +327,7 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   // the views are checked against the terrain).
   RunState s{sc, opt.out / "pair", opt.progress};
   for (const Stage& stage : {stages::world(), stages::scan(), stages::map()}) stage.run(s);
+  writeText(opt.out / "pair" / "scenario.resolved.yaml", resolvedYaml(sc));  // as a run's; `ambler report` shows it
   perception::RegistrationConfig config = registrationConfig(sc);
   // The rover's prior covers every error the grid tries.
   config.prior_translation_m = std::max(config.prior_translation_m, g.translation_m.back());

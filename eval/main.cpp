@@ -80,9 +80,11 @@ int main(int argc, char** argv) {
                                                 "killed before it ended); register only the rest");
 
   std::string report_dir, report_out;
-  auto* report = app.add_subcommand("report", "Write one self-contained HTML report of a run directory: the scenario, "
-                                              "every picture embedded, the metrics as tables (see docs/report.md).");
-  report->add_option("dir", report_dir, "Run directory (as `ambler run` writes it)")->required();
+  auto* report = app.add_subcommand("report", "Write one self-contained HTML report of a run, sweep or basin directory: "
+                                              "the scenario, every picture embedded, the metrics as tables, the goals, "
+                                              "a sweep's plots against its axes (see docs/report.md).");
+  report->add_option("dir", report_dir, "Run, sweep or basin directory (as `ambler run`, `sweep`, `basin` write it)")
+      ->required();
   report->add_option("--out,-o", report_out, "HTML file to write (default DIR/report.html)");
 
   auto* bench = app.add_subcommand("bench", "Measure speed; prints a table of medians.");
@@ -219,7 +221,7 @@ int main(int argc, char** argv) {
       std::filesystem::path out = report_out.empty() ? std::filesystem::path(report_dir) / "report.html"
                                                      : std::filesystem::path(report_out);
       if (out.has_parent_path()) checkOutDir(out.parent_path());
-      writeRunReport(report_dir, out);
+      writeReport(report_dir, out);
     } else if (*locus_vs_cartesian) {
       checkOutDir(exp_out);
       exp_opt.out = exp_out;

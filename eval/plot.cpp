@@ -1,130 +1,224 @@
+// Plots by gnuplot (docs/report.md, "Plots: gnuplot"): the layout (axis ranges from niceTicks and
+// logTicks, fixed pixel margins, the legend's corner) is decided here, so it is the same for every
+// gnuplot version and testable; gnuplot draws. Each plot runs one `gnuplot` child process on a
+// script in its own temporary directory, so plots on several threads never share a file.
 #include "eval/plot.hpp"
 
-#include <opencv2/imgproc.hpp>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
+#include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <limits>
+#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
+#include <string_view>
+#include <system_error>
+
+#include "eval/io.hpp"
+
+extern char** environ;  // the child's environment starts from ours (unistd.h declares it only with _GNU_SOURCE)
 
 namespace ambler::eval {
 
 namespace {
 
-constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
-const cv::Scalar kBlack(0, 0, 0), kGrid(222, 222, 222), kMinorGrid(242, 242, 242), kWhite(255, 255, 255);
+namespace fs = std::filesystem;
 
 // 10^e, correctly rounded for |e| ≤ 22 (powers of ten up to 1e22 are exact doubles).
 double pow10(int e) { return e >= 0 ? std::pow(10.0, e) : 1.0 / std::pow(10.0, -e); }
 
-std::string printf1(const char* pattern, int decimals, double v) {
-  char buf[48];
-  std::snprintf(buf, sizeof buf, pattern, decimals, v);
+// The shortest text that reads back as the same double: the script's numbers are exact.
+std::string num(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+// A gnuplot single-quoted string: no escapes but '' for a quote; line breaks become spaces.
+std::string quoted(const std::string& s) {
+  std::string out = "'";
+  for (const char c : s) {
+    if (c == '\'') out += "''";
+    else if (c == '\n' || c == '\r' || c == '\t') out += ' ';
+    else out += c;
+  }
+  return out + "'";
+}
+
+std::string rgb(const cv::Scalar& bgr) {
+  char buf[16];
+  const auto channel = [](double v) { return int(std::clamp(std::lround(v), 0L, 255L)); };
+  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", channel(bgr[2]), channel(bgr[1]), channel(bgr[0]));
   return buf;
 }
 
-// Tick labels with as many decimals as the step needs, so 0.2 steps read 0.0, 0.2, ... 1.0.
-std::vector<std::string> linearLabels(const std::vector<double>& ticks) {
-  const double step = ticks.size() > 1 ? ticks[1] - ticks[0] : 1.0;
-  const double big = std::max(std::abs(ticks.front()), std::abs(ticks.back()));
-  const int decimals = std::max(0, -int(std::floor(std::log10(step) + 1e-9)));
-  std::vector<std::string> out;
-  for (double t : ticks)
-    out.push_back(big >= 1e6 || decimals > 6 ? printf1("%.*g", 4, t) : printf1("%.*f", decimals, t));
-  return out;
-}
-
-cv::Size textSize(const std::string& s, double scale) {
-  int baseline = 0;
-  return cv::getTextSize(s, kFont, scale, 1, &baseline);
-}
-
-void text(cv::Mat& img, const std::string& s, cv::Point at, double scale) {
-  cv::putText(img, s, at, kFont, scale, kBlack, 1, cv::LINE_AA);
-}
-
-// One axis: data values → pixels, linear or log10.
+// One axis: its range from the first to the last tick (niceTicks, or logTicks on a log axis).
 struct Axis {
   bool log = false;
   std::vector<double> ticks;
-  double lo = 0, hi = 1;  // axis units (log10 of the value on a log axis)
-  double p0 = 0, p1 = 1;  // pixels of lo and hi
 
   bool usable(double v) const { return std::isfinite(v) && (!log || v > 0); }
   double unit(double v) const { return log ? std::log10(v) : v; }
-  double px(double v) const { return p0 + (unit(v) - lo) / (hi - lo) * (p1 - p0); }
+  // 0 at the first tick, 1 at the last.
+  double frac(double v) const { return (unit(v) - unit(ticks.front())) / (unit(ticks.back()) - unit(ticks.front())); }
 
   void fit(double data_lo, double data_hi, int intervals) {
     if (data_lo > data_hi) data_lo = log ? 1.0 : 0.0, data_hi = log ? 10.0 : 1.0;  // no data
     ticks = log ? logTicks(data_lo, data_hi) : niceTicks(data_lo, data_hi, intervals);
-    lo = unit(ticks.front()), hi = unit(ticks.back());
-  }
-  std::vector<std::string> labels() const {
-    if (!log) return linearLabels(ticks);
-    std::vector<std::string> out;
-    for (double t : ticks) out.push_back(printf1("%.*g", 6, t));
-    return out;
   }
   // 2·10^e … 9·10^e between consecutive decade ticks, when the decades are few enough to read.
-  std::vector<double> minor() const {
-    std::vector<double> out;
-    if (!log || ticks.size() > 7 || ticks[1] / ticks[0] > 10.5) return out;
-    for (std::size_t i = 0; i + 1 < ticks.size(); ++i)
-      for (int k = 2; k <= 9; ++k) out.push_back(k * ticks[i]);
-    return out;
+  bool minor() const { return log && ticks.size() <= 7 && ticks[1] / ticks[0] < 10.5; }
+
+  std::string commands(const char* name) const {
+    std::string s = std::string("set ") + name + "range [" + num(ticks.front()) + ":" + num(ticks.back()) + "]\n";
+    if (log) s += std::string("set logscale ") + name + " 10\n";
+    const double step = log ? ticks[1] / ticks[0] : ticks[1] - ticks[0];
+    s += std::string("set ") + name + "tics " + num(ticks.front()) + ", " + num(step) + ", " + num(ticks.back()) +
+         " out nomirror\n";
+    s += std::string("set format ") + name + " '%g'\n";
+    s += minor() ? std::string("set m") + name + "tics 10\n" : std::string("unset m") + name + "tics\n";
+    return s;
   }
 };
 
-void drawYLabel(cv::Mat& canvas, const std::string& label, int x, int y_mid) {
-  if (label.empty()) return;
-  const cv::Size s = textSize(label, 0.5);
-  cv::Mat strip(s.height + 8, s.width + 4, CV_8UC3, kWhite), turned;
-  text(strip, label, cv::Point(2, s.height + 2), 0.5);
-  cv::rotate(strip, turned, cv::ROTATE_90_COUNTERCLOCKWISE);
-  if (turned.rows > canvas.rows || x + turned.cols > canvas.cols) return;  // no room: leave it out
-  const int top = std::clamp(y_mid - turned.rows / 2, 0, canvas.rows - turned.rows);
-  turned.copyTo(canvas(cv::Rect(x, top, turned.cols, turned.rows)));
+struct Layout {
+  Axis x, y;
+  PlotMargins m{};
+};
+
+Layout layout(const PlotSpec& spec, int width, int height) {
+  if (width < 240 || height < 180)
+    throw std::invalid_argument("renderPlot: the image must be at least 240 x 180 pixels");
+  Layout l;
+  l.x.log = spec.log_x, l.y.log = spec.log_y;
+  double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL;
+  for (const Series& s : spec.series) {
+    if (s.x.size() != s.y.size())
+      throw std::invalid_argument("renderPlot: series '" + s.label + "' has x and y of different lengths");
+    for (std::size_t i = 0; i < s.x.size(); ++i)
+      if (l.x.usable(s.x[i]) && l.y.usable(s.y[i])) {
+        x_lo = std::min(x_lo, s.x[i]), x_hi = std::max(x_hi, s.x[i]);
+        y_lo = std::min(y_lo, s.y[i]), y_hi = std::max(y_hi, s.y[i]);
+      }
+  }
+  l.m = plotMargins(spec);
+  l.x.fit(x_lo, x_hi, std::max(2, (width - l.m.left - l.m.right) / 130));
+  l.y.fit(y_lo, y_hi, std::max(2, (height - l.m.top - l.m.bottom) / 80));
+  return l;
 }
 
-void drawLegend(cv::Mat& canvas, const PlotSpec& spec, const std::vector<cv::Scalar>& colours,
-                const std::vector<std::vector<cv::Point2d>>& points, const cv::Rect& area) {
-  std::vector<int> shown;
-  int text_w = 0;
-  for (std::size_t i = 0; i < spec.series.size(); ++i)
-    if (!spec.series[i].label.empty()) {
-      shown.push_back(int(i));
-      text_w = std::max(text_w, textSize(spec.series[i].label, 0.45).width);
-    }
-  if (shown.empty()) return;
-  const int row_h = 20, w = std::min(area.width - 12, text_w + 48);
-  const int h = std::min(area.height - 12, int(shown.size()) * row_h + 8);
-  // The corner of the plot area that hides the fewest points.
-  const std::array<cv::Point, 4> corners{cv::Point(area.x + area.width - w - 6, area.y + 6),
-                                         cv::Point(area.x + 6, area.y + 6),
-                                         cv::Point(area.x + area.width - w - 6, area.y + area.height - h - 6),
-                                         cv::Point(area.x + 6, area.y + area.height - h - 6)};
-  cv::Rect best;
+// The key's corner inside the plot area: the one whose (estimated) box hides the fewest points,
+// in the order top right, top left, bottom right, bottom left.
+std::string keyCorner(const PlotSpec& spec, const Layout& l, int width, int height) {
+  std::size_t rows = 0, chars = 0;
+  for (const Series& s : spec.series)
+    if (!s.label.empty() && (s.lines || s.markers)) ++rows, chars = std::max(chars, s.label.size());
+  const double area_w = width - l.m.left - l.m.right, area_h = height - l.m.top - l.m.bottom;
+  const double box_w = std::min(1.0, (7.0 * double(chars) + 70) / area_w);
+  const double box_h = std::min(1.0, (17.0 * double(rows) + 14) / area_h);
+  const std::array<std::pair<const char*, std::pair<double, double>>, 4> corners{
+      {{"top right", {1 - box_w, 1 - box_h}}, {"top left", {0, 1 - box_h}}, {"bottom right", {1 - box_w, 0}},
+       {"bottom left", {0, 0}}}};
+  const char* best = corners[0].first;
   long fewest = std::numeric_limits<long>::max();
-  for (const auto& corner : corners) {
-    const cv::Rect box(corner, cv::Size(w, h));
+  for (const auto& [name, corner] : corners) {
     long n = 0;
-    for (const auto& ps : points)
-      for (const auto& p : ps) n += box.contains(cv::Point(int(p.x), int(p.y)));
-    if (n < fewest) fewest = n, best = box;
+    for (const Series& s : spec.series)
+      if (s.lines || s.markers)
+        for (std::size_t i = 0; i < s.x.size(); ++i) {
+          if (!l.x.usable(s.x[i]) || !l.y.usable(s.y[i])) continue;
+          const double fx = l.x.frac(s.x[i]), fy = l.y.frac(s.y[i]);
+          n += fx >= corner.first && fx <= corner.first + box_w && fy >= corner.second && fy <= corner.second + box_h;
+        }
+    if (n < fewest) fewest = n, best = name;
   }
-  canvas(best).setTo(kWhite);
-  cv::rectangle(canvas, best, cv::Scalar(160, 160, 160), 1);
-  for (std::size_t k = 0; k < shown.size(); ++k) {
-    const Series& s = spec.series[std::size_t(shown[k])];
-    const int y = best.y + 4 + int(k) * row_h + row_h / 2;
-    if (y + row_h / 2 > best.y + best.height) break;  // more series than the plot has room for
-    const cv::Scalar& colour = colours[std::size_t(shown[k])];
-    if (s.lines) cv::line(canvas, {best.x + 6, y}, {best.x + 32, y}, colour, 2, cv::LINE_AA);
-    if (s.markers) cv::circle(canvas, {best.x + 19, y}, 3, colour, cv::FILLED, cv::LINE_AA);
-    text(canvas, s.label, cv::Point(best.x + 40, y + 5), 0.45);
+  return best;
+}
+
+// Removes the temporary directory however renderPlot leaves.
+struct TempDir {
+  fs::path path;
+  TempDir() {
+    std::string pattern = (fs::temp_directory_path() / "ambler-plot-XXXXXX").string();
+    if (!::mkdtemp(pattern.data()))
+      throw std::runtime_error(pattern + ": cannot create a temporary directory: " +
+                               std::error_code(errno, std::generic_category()).message());
+    path = pattern;
   }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+};
+
+std::string lastLine(const fs::path& file) {
+  std::ifstream in(file);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (line.find_first_not_of(" \t^\r") != std::string::npos) last = line;
+  return last;
+}
+
+// Runs `gnuplot -d SCRIPT` (no init files) in the C locale, stdout and stderr to files in `dir`.
+void runGnuplot(const fs::path& dir, const fs::path& script) {
+  std::vector<std::string> env;
+  for (char** e = environ; *e; ++e) {
+    const std::string_view v(*e);
+    if (v.starts_with("LC_") || v.starts_with("LANG=") || v.starts_with("LANGUAGE=") || v.starts_with("GNUPLOT_"))
+      continue;
+    env.emplace_back(v);
+  }
+  env.emplace_back("LC_ALL=C");
+  std::vector<char*> envp;
+  for (auto& s : env) envp.push_back(s.data());
+  envp.push_back(nullptr);
+  std::string arg0 = "gnuplot", arg1 = "-d", arg2 = script.string();
+  char* argv[] = {arg0.data(), arg1.data(), arg2.data(), nullptr};
+
+  const std::string out = (dir / "stdout").string(), err = (dir / "stderr").string();
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
+  pid_t pid = 0;
+  const int spawned = ::posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv, envp.data());
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned == ENOENT) throw std::runtime_error("gnuplot not found: install gnuplot-nox (scripts/setup.sh)");
+  if (spawned != 0)
+    throw std::runtime_error("gnuplot: cannot start: " + std::error_code(spawned, std::generic_category()).message());
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) throw std::runtime_error("gnuplot: waitpid failed");
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 127)
+    throw std::runtime_error("gnuplot not found: install gnuplot-nox (scripts/setup.sh)");
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+    const std::string why = lastLine(err);
+    throw std::runtime_error("gnuplot failed" +
+                             (WIFEXITED(status) ? " (exit " + std::to_string(WEXITSTATUS(status)) + ")"
+                                                : std::string(" (killed by a signal)")) +
+                             (why.empty() ? std::string() : ": " + why));
+  }
+}
+
+// FNV-1a, 64 bits: the kept scripts' names.
+std::uint64_t fnv1a(std::string_view s) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (const char c : s) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;
+  return h;
 }
 
 }  // namespace
@@ -180,91 +274,82 @@ cv::Scalar plotColour(int i) {
   return tab10[std::size_t(((i % 10) + 10) % 10)];
 }
 
-cv::Mat renderPlot(const PlotSpec& spec, int width, int height) {
-  if (width < 240 || height < 180)
-    throw std::invalid_argument("renderPlot: the image must be at least 240 x 180 pixels");
-  Axis ax, ay;
-  ax.log = spec.log_x, ay.log = spec.log_y;
-  double x_lo = HUGE_VAL, x_hi = -HUGE_VAL, y_lo = HUGE_VAL, y_hi = -HUGE_VAL;
-  for (const Series& s : spec.series) {
-    if (s.x.size() != s.y.size())
-      throw std::invalid_argument("renderPlot: series '" + s.label + "' has x and y of different lengths");
-    for (std::size_t i = 0; i < s.x.size(); ++i)
-      if (ax.usable(s.x[i]) && ay.usable(s.y[i])) {
-        x_lo = std::min(x_lo, s.x[i]), x_hi = std::max(x_hi, s.x[i]);
-        y_lo = std::min(y_lo, s.y[i]), y_hi = std::max(y_hi, s.y[i]);
-      }
-  }
-  const int top = spec.title.empty() ? 16 : 40, bottom = spec.x_label.empty() ? 34 : 56, right = 24;
-  ay.fit(y_lo, y_hi, std::max(2, (height - top - bottom) / 80));
-  const auto y_labels = ay.labels();
-  int label_w = 0;
-  for (const auto& l : y_labels) label_w = std::max(label_w, textSize(l, 0.42).width);
-  const int left = label_w + 14 + (spec.y_label.empty() ? 4 : 26);
-  const cv::Rect area(left, top, width - left - right, height - top - bottom);
-  ax.fit(x_lo, x_hi, std::max(2, area.width / 130));
-  ax.p0 = area.x, ax.p1 = area.x + area.width - 1;
-  ay.p0 = area.y + area.height - 1, ay.p1 = area.y;
+PlotMargins plotMargins(const PlotSpec& spec) {
+  return {spec.y_label.empty() ? 64 : 84, 24, spec.title.empty() ? 16 : 40, spec.x_label.empty() ? 34 : 56};
+}
 
-  cv::Mat canvas(height, width, CV_8UC3, kWhite);
-  const auto xi = [&](double v) { return int(std::lround(ax.px(v))); };
-  const auto yi = [&](double v) { return int(std::lround(ay.px(v))); };
-  for (double t : ax.minor()) cv::line(canvas, {xi(t), area.y}, {xi(t), area.y + area.height - 1}, kMinorGrid);
-  for (double t : ay.minor()) cv::line(canvas, {area.x, yi(t)}, {area.x + area.width - 1, yi(t)}, kMinorGrid);
-  const auto x_labels = ax.labels();
-  for (std::size_t i = 0; i < ax.ticks.size(); ++i) {
-    const int x = xi(ax.ticks[i]);
-    cv::line(canvas, {x, area.y}, {x, area.y + area.height - 1}, kGrid);
-    cv::line(canvas, {x, area.y + area.height - 1}, {x, area.y + area.height + 3}, kBlack);
-    const cv::Size s = textSize(x_labels[i], 0.42);
-    text(canvas, x_labels[i], {x - s.width / 2, area.y + area.height + 8 + s.height}, 0.42);
-  }
-  for (std::size_t i = 0; i < ay.ticks.size(); ++i) {
-    const int y = yi(ay.ticks[i]);
-    cv::line(canvas, {area.x, y}, {area.x + area.width - 1, y}, kGrid);
-    cv::line(canvas, {area.x - 4, y}, {area.x, y}, kBlack);
-    const cv::Size s = textSize(y_labels[i], 0.42);
-    text(canvas, y_labels[i], {area.x - 7 - s.width, y + s.height / 2}, 0.42);
-  }
-  cv::rectangle(canvas, area, kBlack, 1);
+std::string gnuplotScript(const PlotSpec& spec, int width, int height, const std::string& png_path) {
+  const Layout l = layout(spec, width, height);
+  std::string g;
+  g += "# ambler renderPlot (eval/plot.cpp); re-render with: gnuplot -d THIS_FILE\n";
+  g += "set encoding utf8\n";
+  g += "set terminal pngcairo noenhanced size " + std::to_string(width) + "," + std::to_string(height) +
+       " font 'DejaVu Sans,10' background '#ffffff' linewidth 1\n";
+  g += "set output " + quoted(png_path) + "\n";
+  // Margins at fixed pixels, so the plot area does not move with the tick labels: pngcairo puts
+  // screen coordinate f at pixel f·(size − 1), so the frame is on columns left and
+  // width − 1 − right, rows top and height − 1 − bottom.
+  const auto screen = [](int px, int size) { return num(double(px) / double(size - 1)); };
+  g += "set lmargin at screen " + screen(l.m.left, width) + "\n";
+  g += "set rmargin at screen " + screen(width - 1 - l.m.right, width) + "\n";
+  g += "set tmargin at screen " + screen(height - 1 - l.m.top, height) + "\n";
+  g += "set bmargin at screen " + screen(l.m.bottom, height) + "\n";
+  g += "set border 15 lc rgb '#000000' lw 1\n";
+  g += l.x.commands("x") + l.y.commands("y");
+  g += "set grid xtics ytics mxtics mytics lt 1 lc rgb '#dedede' lw 1, lt 1 lc rgb '#f2f2f2' lw 1\n";
+  if (!spec.title.empty()) g += "set title " + quoted(spec.title) + " font 'DejaVu Sans,12'\n";
+  if (!spec.x_label.empty()) g += "set xlabel " + quoted(spec.x_label) + "\n";
+  if (!spec.y_label.empty()) g += "set ylabel " + quoted(spec.y_label) + "\n";
+  g += "set key inside " + keyCorner(spec, l, width, height) +
+       " reverse Left opaque box lc rgb '#a0a0a0' samplen 3 spacing 1.1 width 1\n";
 
-  std::vector<cv::Scalar> colours;
-  std::vector<std::vector<cv::Point2d>> points(spec.series.size());
+  std::vector<std::string> plots;
   for (std::size_t k = 0; k < spec.series.size(); ++k) {
     const Series& s = spec.series[k];
-    colours.push_back(s.colour[0] < 0 ? plotColour(int(k)) : s.colour);
-    bool joined = false;  // the previous point was drawable: a NaN breaks the line
-    for (std::size_t i = 0; i < s.x.size(); ++i) {
-      if (!ax.usable(s.x[i]) || !ay.usable(s.y[i])) {
-        joined = false;
-        continue;
-      }
-      const cv::Point2d p(ax.px(s.x[i]), ay.px(s.y[i]));
-      if (joined && s.lines) {
-        const cv::Point2d& q = points[k].back();
-        cv::line(canvas, cv::Point(int(std::lround(q.x)), int(std::lround(q.y))),
-                 cv::Point(int(std::lround(p.x)), int(std::lround(p.y))), colours[k], 2, cv::LINE_AA);
-      }
-      points[k].push_back(p);
-      joined = true;
-    }
-    if (s.markers)
-      for (const auto& p : points[k])
-        cv::circle(canvas, cv::Point(int(std::lround(p.x)), int(std::lround(p.y))), 3, colours[k], cv::FILLED,
-                   cv::LINE_AA);
+    if (!s.lines && !s.markers) continue;  // widens the axes only
+    // One line per point; a blank line where a point is not drawable breaks the line there.
+    std::string block = "$s" + std::to_string(k) + " << EOD\n";
+    bool any = false;
+    for (std::size_t i = 0; i < s.x.size(); ++i)
+      if (l.x.usable(s.x[i]) && l.y.usable(s.y[i])) block += num(s.x[i]) + " " + num(s.y[i]) + "\n", any = true;
+      else block += "\n";
+    block += "EOD\n";
+    const std::string style = s.lines && s.markers ? "linespoints lw 2 pt 7 ps 0.9"
+                              : s.lines            ? "lines lw 2"
+                                                   : "points pt 7 ps 0.9";
+    const std::string what = any ? (g += block, "$s" + std::to_string(k)) : std::string("NaN");
+    plots.push_back(what + " with " + style + " lc rgb '" + rgb(s.colour[0] < 0 ? plotColour(int(k)) : s.colour) +
+                    "' " + (s.label.empty() ? std::string("notitle") : "title " + quoted(s.label)));
   }
-  drawLegend(canvas, spec, colours, points, area);
+  if (plots.empty()) plots.push_back("NaN notitle");
+  g += "plot ";
+  for (std::size_t i = 0; i < plots.size(); ++i) g += (i ? ", \\\n     " : "") + plots[i];
+  return g + "\n";
+}
 
-  if (!spec.title.empty()) {
-    const cv::Size s = textSize(spec.title, 0.6);
-    text(canvas, spec.title, {std::max(4, (width - s.width) / 2), 12 + s.height}, 0.6);
+cv::Mat renderPlot(const PlotSpec& spec, int width, int height) {
+  if (const char* keep = std::getenv("AMBLER_KEEP_PLOTS"); keep && *keep) {
+    const std::string stem = [&] {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "plot-%016llx", static_cast<unsigned long long>(
+                                                         fnv1a(gnuplotScript(spec, width, height, "plot.png"))));
+      return std::string(buf);
+    }();
+    createOutDir(keep);
+    writeText(fs::path(keep) / (stem + ".gp"), gnuplotScript(spec, width, height, stem + ".png"));
   }
-  if (!spec.x_label.empty()) {
-    const cv::Size s = textSize(spec.x_label, 0.5);
-    text(canvas, spec.x_label, {area.x + (area.width - s.width) / 2, height - 10}, 0.5);
+  TempDir dir;
+  const fs::path png = dir.path / "plot.png", script = dir.path / "plot.gp";
+  {
+    std::ofstream out(script, std::ios::binary);
+    out << gnuplotScript(spec, width, height, png.string());
+    if (!out.flush()) throw std::runtime_error(script.string() + ": write failed");
   }
-  drawYLabel(canvas, spec.y_label, 4, area.y + area.height / 2);
-  return canvas;
+  runGnuplot(dir.path, script);
+  cv::Mat img = cv::imread(png.string(), cv::IMREAD_COLOR);
+  if (img.empty() || img.cols != width || img.rows != height)
+    throw std::runtime_error("gnuplot wrote no " + std::to_string(width) + " x " + std::to_string(height) + " PNG");
+  return img;
 }
 
 }  // namespace ambler::eval

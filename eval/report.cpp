@@ -10,20 +10,13 @@
 #include <vector>
 
 #include "eval/io.hpp"
+#include "eval/report_internal.hpp"
 
 namespace ambler::eval {
 namespace {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::ordered_json;
-
-std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open file");
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+using namespace report_detail;
 
 // The sections of a run report, in the order they appear (docs/report.md).
 enum Section { kRun, kWorld, kScans, kMaps, kMatching, kFootfalls, kLeg, kOther, kSectionCount };
@@ -31,39 +24,10 @@ constexpr const char* kIds[kSectionCount] = {"run", "world", "scans", "maps", "m
 constexpr const char* kTitles[kSectionCount] = {"Run",      "World",     "Scans", "Maps",
                                                 "Matching", "Footfalls", "Leg",   "Other"};
 
-struct Table {
-  std::string caption;
-  std::vector<std::string> columns;                              // entry labels
-  std::vector<std::pair<std::string, std::vector<std::string>>> rows;  // metric, one cell per column
-};
-
 struct Figure {
   std::string rel;  // path under the run directory, '/'-separated
   fs::path path;
 };
-
-// Numbers in text order: "view_2" before "view_10".
-bool naturalLess(const std::string& a, const std::string& b) {
-  size_t i = 0, j = 0;
-  while (i < a.size() && j < b.size()) {
-    if (std::isdigit(static_cast<unsigned char>(a[i])) && std::isdigit(static_cast<unsigned char>(b[j]))) {
-      size_t ie = i, je = j;
-      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie]))) ++ie;
-      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je]))) ++je;
-      std::string da = a.substr(i, ie - i), db = b.substr(j, je - j);
-      da.erase(0, std::min(da.find_first_not_of('0'), da.size()));
-      db.erase(0, std::min(db.find_first_not_of('0'), db.size()));
-      if (da.size() != db.size()) return da.size() < db.size();
-      if (da != db) return da < db;
-      i = ie, j = je;
-    } else {
-      if (a[i] != b[j]) return a[i] < b[j];
-      ++i, ++j;
-    }
-  }
-  if ((a.size() - i) != (b.size() - j)) return a.size() - i < b.size() - j;
-  return a < b;  // equal up to leading zeros: a total order all the same
-}
 
 Section figureSection(const std::string& rel) {
   const size_t slash = rel.find('/');
@@ -106,15 +70,22 @@ std::string formatScalar(const Json& v) {
 // An entry's column label from the keys that name it: view, pair, method.
 std::string entryLabel(const Json& entry, size_t index) {
   std::string label;
-  const auto add = [&](const std::string& s) { label += (label.empty() ? "" : " ") + s; };
+  const auto add = [&](const std::string& s) {
+    if (!label.empty()) label += ' ';
+    label += s;
+  };
   if (entry.contains("view") && entry["view"].is_primitive()) add("view " + formatScalar(entry["view"]));
   if (entry.contains("pair") && entry["pair"].is_array()) {
     std::string p;
-    for (const Json& k : entry["pair"]) p += (p.empty() ? "" : "\xE2\x80\x93") + formatScalar(k);  // an en dash
+    for (const Json& k : entry["pair"]) {
+      if (!p.empty()) p += "\xE2\x80\x93";  // an en dash
+      p += formatScalar(k);
+    }
     add("pair " + p);
   }
   if (entry.contains("method") && entry["method"].is_string()) add(formatScalar(entry["method"]));
-  return label.empty() ? "#" + std::to_string(index) : label;
+  if (label.empty()) label = std::string(1, '#').append(std::to_string(index));
+  return label;
 }
 
 bool isLabelKey(const std::string& key) { return key == "view" || key == "pair" || key == "method"; }
@@ -171,54 +142,6 @@ Table legTable(const Json& footfall) {
     }
   return metricsTable("leg", legs);
 }
-
-std::string tableHtml(const Table& t) {
-  std::string h = "<table>\n<caption>" + htmlEscape(t.caption) + "</caption>\n<tr><th>metric</th>";
-  for (const std::string& c : t.columns) h += "<th>" + htmlEscape(c) + "</th>";
-  h += "</tr>\n";
-  for (const auto& [name, cells] : t.rows) {
-    h += "<tr><th>" + htmlEscape(name) + "</th>";
-    for (const std::string& c : cells) h += "<td>" + c + "</td>";
-    h += "</tr>\n";
-  }
-  return h + "</table>\n";
-}
-
-// Width and height from a PNG's IHDR chunk (bytes 16-23, big-endian), 0 if it is not one.
-std::pair<unsigned, unsigned> pngSize(const std::string& bytes) {
-  if (bytes.size() < 24 || bytes.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0 || bytes.compare(12, 4, "IHDR") != 0)
-    return {0, 0};
-  const auto be32 = [&](size_t at) {
-    unsigned v = 0;
-    for (size_t i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(bytes[at + i]);
-    return v;
-  };
-  return {be32(16), be32(20)};
-}
-
-std::string figureHtml(const Figure& f) {
-  const std::string bytes = readFile(f.path);
-  const auto [w, h] = pngSize(bytes);
-  std::string html = "<figure><img alt=\"" + htmlEscape(f.rel) + "\"";
-  if (w > 0 && h > 0) html += " width=\"" + std::to_string(w) + "\" height=\"" + std::to_string(h) + "\"";
-  html += " src=\"data:image/png;base64," + base64Encode(bytes) + "\"><figcaption>" + htmlEscape(f.rel) +
-          "</figcaption></figure>\n";
-  return html;
-}
-
-constexpr const char* kStyle = R"(body{font-family:sans-serif;margin:2em auto;max-width:72em;padding:0 1em;color:#222}
-h1{font-size:1.6em}h2{border-bottom:1px solid #ccc;margin-top:2em}
-nav a{margin-right:1em}
-pre{background:#f6f6f6;border:1px solid #ddd;padding:0.8em;overflow-x:auto;font-size:0.85em}
-table{border-collapse:collapse;margin:1em 0;font-size:0.9em}
-caption{text-align:left;font-weight:bold;padding:0.3em 0}
-th,td{border:1px solid #ccc;padding:0.2em 0.6em}
-td{text-align:right;font-variant-numeric:tabular-nums}
-tr>th:first-child{text-align:left;font-weight:normal;font-family:monospace}
-figure{display:inline-block;margin:0.5em;vertical-align:top;max-width:100%}
-img{max-width:100%;height:auto;border:1px solid #eee}
-figcaption{font-family:monospace;font-size:0.8em;color:#555}
-)";
 
 }  // namespace
 
@@ -317,31 +240,54 @@ std::string runReportHtml(const fs::path& run_dir) {
 
   const std::string name =
       metrics.contains("name") && metrics["name"].is_string() ? metrics["name"].get<std::string>() : "";
-  fs::path shown = run_dir.lexically_normal();
-  if (shown.filename().empty()) shown = shown.parent_path();
-  const std::string title = "ambler run report: " + (name.empty() ? shown.filename().string() : name);
+  const std::string shown = shownName(run_dir);
+  const std::string title = "ambler run report: " + (name.empty() ? shown : name);
+  const Table goal_table = runGoalsTable(metrics, scenario_text);
 
-  std::string html = "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" +
-                     htmlEscape(title) + "</title>\n<style>\n" + kStyle + "</style>\n</head>\n<body>\n<h1>" +
-                     htmlEscape(title) + "</h1>\n<p>Run directory <code>" + htmlEscape(shown.filename().string()) +
+  std::string html = pageHead(title) + "<p>Run directory <code>" + htmlEscape(shown) +
                      "</code>. Every picture of the run is embedded; metrics from <code>metrics.json</code> "
                      "(numbers to 4 significant digits, " "\xE2\x80\x94" " where a figure is not defined).</p>\n";
   html += "<nav>";
   if (has_scenario) html += "<a href=\"#scenario\">Scenario</a>";
+  if (!goal_table.rows.empty()) html += "<a href=\"#goals\">Goals</a>";
   for (int s = 0; s < kSectionCount; ++s)
     if (!figures[s].empty() || !tables[s].empty())
       html += std::string("<a href=\"#") + kIds[s] + "\">" + kTitles[s] + "</a>";
   html += "</nav>\n";
   if (has_scenario)
     html += "<h2 id=\"scenario\">Scenario</h2>\n<pre>" + htmlEscape(scenario_text) + "</pre>\n";
+  if (!goal_table.rows.empty())
+    html += "<h2 id=\"goals\">Goals</h2>\n<p>The metrics the docs state a goal for (docs/report.md, "
+            "\"Goals\").</p>\n" + tableHtml(goal_table);
   for (int s = 0; s < kSectionCount; ++s) {
     if (figures[s].empty() && tables[s].empty()) continue;
     html += std::string("<h2 id=\"") + kIds[s] + "\">" + kTitles[s] + "</h2>\n";
     for (const Table& t : tables[s]) html += tableHtml(t);
-    for (const Figure& f : figures[s]) html += figureHtml(f);
+    for (const Figure& f : figures[s]) html += figureHtml(f.path, f.rel);
   }
-  html += "</body>\n</html>\n";
-  return html;
+  return html + pageTail();
+}
+
+ReportKind reportKind(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::is_regular_file(dir / "metrics.json", ec)) return ReportKind::Run;
+  if (fs::is_regular_file(dir / "results.csv", ec)) return ReportKind::Sweep;
+  if (fs::is_regular_file(dir / "basin.csv", ec)) return ReportKind::Basin;
+  throw std::runtime_error(dir.string() +
+                           ": not a run, sweep or basin directory (no metrics.json, results.csv or basin.csv)");
+}
+
+fs::path writeReport(const fs::path& dir, const fs::path& out_html) {
+  const fs::path html_dir = out_html.has_parent_path() ? out_html.parent_path() : fs::path(".");
+  std::string html;  // all of it before anything is written
+  switch (reportKind(dir)) {
+    case ReportKind::Run: html = runReportHtml(dir); break;
+    case ReportKind::Sweep: html = sweepReportHtml(dir, html_dir); break;
+    case ReportKind::Basin: html = basinReportHtml(dir); break;
+  }
+  if (out_html.has_parent_path()) createOutDir(out_html.parent_path());
+  writeText(out_html, html);
+  return out_html;
 }
 
 fs::path writeRunReport(const fs::path& run_dir, const fs::path& out_html) {

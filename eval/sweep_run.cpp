@@ -151,6 +151,26 @@ Row rowFromPayload(const std::string& payload, const fs::path& journal, std::siz
   return row;
 }
 
+// DIR/sweep.resolved.yaml: the sweep as it was run (its name, base and axes as read), for `ambler report`
+// (docs/report.md), which needs to tell the axis columns of results.csv from the metrics.
+std::string sweepSpecText(const Sweep& sweep) {
+  std::string y = "# The sweep this directory holds, as `ambler sweep` read it from " + sweep.file.filename().string() +
+                  " (docs/sweeps.md)\nname: " + sweep.name + "\n";
+  if (!sweep.description.empty()) y += "description: " + nlohmann::json(sweep.description).dump() + "\n";
+  y += "base: " + nlohmann::json(sweep.base.generic_string()).dump() + "\naxes:\n";
+  for (const auto& axis : sweep.axes) {
+    y += "  " + axis.key + ": [";
+    for (std::size_t i = 0; i < axis.values.size(); ++i) y += (i ? ", " : "") + axis.values[i];
+    y += "]\n";
+  }
+  if (!sweep.metrics.empty()) {
+    y += "metrics: [";
+    for (std::size_t i = 0; i < sweep.metrics.size(); ++i) y += (i ? ", " : "") + sweep.metrics[i];
+    y += "]\n";
+  }
+  return y;
+}
+
 // What the journal's records depend on: every run's resolved scenario, the metric columns, the
 // measured times and the split. A journal with another identity is refused at --resume.
 std::string journalIdentity(const Sweep& sweep, const SweepOptions& opt, const std::vector<std::size_t>& todo) {
@@ -228,6 +248,7 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
                       [&](std::size_t i, const std::string& payload) {
                         rows[i] = rowFromPayload(payload, journal_file, todo[i]);
                       });
+  writeText(opt.out / "sweep.resolved.yaml", sweepSpecText(sweep));  // once the journal is accepted
   say("sweep " + sweep.name + ": " + std::to_string(todo.size()) + " of " + std::to_string(total) + " runs" +
       (opt.shard
            ? " (shard " + std::to_string(opt.shard->index) + " of " + std::to_string(opt.shard->count) + ")"

@@ -215,7 +215,11 @@ expect_error basin_merge_with_timing '--merge: merges the shards. files; --timin
 expect_error experiment_sweeps_missing 'nosweeps/tilt_noise\.yaml: cannot open file' experiment locus-vs-cartesian --out out --sweeps nosweeps --quiet
 
 # ---- Reports (adir: an empty directory, made above)
-expect_error report_not_a_run_directory 'adir: not a run directory \(no metrics\.json\)' report adir
+expect_error report_not_a_run_directory 'adir: not a run, sweep or basin directory \(no metrics\.json, results\.csv or basin\.csv\)' report adir
+mkdir -p badsweep && printf 'run,seed\n0\n' >badsweep/results.csv
+expect_error report_results_csv_ragged 'badsweep/results\.csv: row 1 has 1 cells, the header 2' report badsweep
+mkdir -p badbasin && printf 'method,t\n' >badbasin/basin.csv
+expect_error report_basin_csv_header 'badbasin/basin\.csv: not a basin table \(expected a CSV header starting with method,translation_m,rotation_deg,trial,translation_error_m,rotation_error_deg,success\)' report badbasin
 
 # ---- Output directories (--out): in the program's words, before any work
 printf 'a file\n' >afile
