@@ -110,9 +110,10 @@ void run(RunState& s) {
                               {"dem_pixel_m", {dem->pixel_m[0], dem->pixel_m[1]}},
                               {"origin_en_m", {dem->frame.origin_x_m, dem->frame.origin_y_m}},
                               {"vertical_offset_m", dem->vertical_offset_m}};
-      s.say("world     DEM " + sc.terrain.dem + " (" + dem->crs_name + "), origin at E " +
+      const double off = dem->vertical_offset_m;
+      s.say("world     DEM " + sc.terrain.dem + " (" + dem->crs_name + "): world origin at E " +
             scenario_detail::shortest(dem->frame.origin_x_m) + ", N " + scenario_detail::shortest(dem->frame.origin_y_m) +
-            ", z = DEM height - " + scenario_detail::shortest(dem->vertical_offset_m) + " m");
+            ", z = DEM height " + (off < 0 ? "+ " : "- ") + metres(std::abs(off)) + " m");
     }
   }
   s.truth = std::make_unique<sim::GroundTruth>(*s.scene);
