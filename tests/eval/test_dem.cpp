@@ -292,6 +292,16 @@ TEST(DemRun, MapRastersSitOnTheDem) {
   EXPECT_TRUE(OSRIsSame(srs, utm)) << GDALGetProjectionRef(ds);
   OSRDestroySpatialReference(utm);
   GDALClose(ds);
+  // Same scenario, same bytes (metrics.json's timing_s aside).
+  runScenario(sc, {tmp.dir / "again", false});
+  int files = 0;
+  for (const auto& e : fs::recursive_directory_iterator(tmp.dir / "run")) {
+    if (!e.is_regular_file() || e.path().filename() == "metrics.json") continue;
+    ++files;
+    EXPECT_TRUE(test::slurp(e.path()) == test::slurp(tmp.dir / "again" / fs::relative(e.path(), tmp.dir / "run")))
+        << e.path();
+  }
+  EXPECT_GT(files, 10);
 }
 
 TEST(SampleDem, RegeneratingItGivesTheShippedBytes) {

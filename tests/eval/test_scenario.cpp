@@ -172,7 +172,7 @@ TEST(ScenarioExamples, EveryExampleLoadsAndRoundTrips) {
     names.insert(entry.path().stem().string());
     expectRoundTrip(s);
   }
-  for (const char* name : {"demo", "plane", "ledge", "mars"})
+  for (const char* name : {"demo", "plane", "ledge", "mars", "dem"})
     EXPECT_TRUE(names.count(name)) << name;
 }
 
