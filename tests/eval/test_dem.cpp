@@ -304,6 +304,29 @@ TEST(DemRun, MapRastersSitOnTheDem) {
   EXPECT_GT(files, 10);
 }
 
+// The sample's nodata collar: dem.yaml's window is clear of it; a window in a corner is refused.
+TEST(SampleDem, ItsCollarIsNodataAndTheScenarioWindowIsClearOfIt) {
+  const fs::path scenario = fs::path(AMBLER_SOURCE_DIR) / "scenarios" / "dem.yaml";
+  Scenario sc = loadScenario(scenario);
+  const DemSurface dem = readScenarioDem(sc);
+  EXPECT_EQ(dem.dem_cols, 256);
+  EXPECT_EQ(dem.pixel_m[0], 1.0);
+  EXPECT_EQ(dem.frame.origin_x_m, 4000.0);
+  EXPECT_EQ(dem.frame.origin_y_m, 1093000.0);
+  EXPECT_NEAR(dem.heights(200, 200), 0.0, 1e-9);  // the default offset: z = 0 under the origin
+  EXPECT_GT(dem.vertical_offset_m, -2570.0);
+  EXPECT_LT(dem.vertical_offset_m, -2550.0);
+  sc.terrain.dem_centre_m = Eigen::Vector2d(3890.0, 1093110.0);  // the north-west corner
+  try {
+    readScenarioDem(sc);
+    ADD_FAILURE() << "accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("481 nodata pixels under the window (the first at column 7, row 7)"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(SampleDem, RegeneratingItGivesTheShippedBytes) {
   test::TempDir tmp;
   writeSampleDem(tmp.dir / "sample.tif");
