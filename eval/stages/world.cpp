@@ -105,8 +105,7 @@ void run(RunState& s) {
     if (dem) {
       // Map rasters sit on the DEM: its CRS, the world origin at the window centre.
       s.geo = dem->frame;
-      s.metrics["terrain"] = {{"dem", sc.terrain.dem},
-                              {"dem_crs", dem->crs_name},
+      s.metrics["terrain"] = {{"dem_crs", dem->crs_name},
                               {"dem_pixel_m", {dem->pixel_m[0], dem->pixel_m[1]}},
                               {"origin_en_m", {dem->frame.origin_x_m, dem->frame.origin_y_m}},
                               {"vertical_offset_m", dem->vertical_offset_m}};
