@@ -105,6 +105,9 @@ void run(RunState& s) {
     if (dem) {
       // Map rasters sit on the DEM: its CRS, the world origin at the window centre.
       s.geo = dem->frame;
+      s.terrain_resolved = sc.terrain;  // scenario.resolved.yaml writes the centre and offset used
+      s.terrain_resolved->dem_centre_m = Eigen::Vector2d(dem->frame.origin_x_m, dem->frame.origin_y_m);
+      s.terrain_resolved->dem_vertical_offset_m = dem->vertical_offset_m;
       s.metrics["terrain"] = {{"dem_crs", dem->crs_name},
                               {"dem_pixel_m", {dem->pixel_m[0], dem->pixel_m[1]}},
                               {"origin_en_m", {dem->frame.origin_x_m, dem->frame.origin_y_m}},

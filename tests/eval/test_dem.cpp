@@ -292,8 +292,13 @@ TEST(DemRun, MapRastersSitOnTheDem) {
   EXPECT_TRUE(OSRIsSame(srs, utm)) << GDALGetProjectionRef(ds);
   OSRDestroySpatialReference(utm);
   GDALClose(ds);
-  // Same scenario, same bytes (metrics.json's timing_s aside).
-  runScenario(sc, {tmp.dir / "again", false});
+  // The resolved scenario has the centre and offset the run found in the file; read back, it is the
+  // same run: same bytes in every file (metrics.json's timing_s aside).
+  const Scenario back = loadScenario(tmp.dir / "run" / "scenario.resolved.yaml");
+  ASSERT_TRUE(back.terrain.dem_centre_m && back.terrain.dem_vertical_offset_m);
+  EXPECT_EQ(*back.terrain.dem_centre_m, Eigen::Vector2d(f.centreE(), f.centreN()));
+  EXPECT_EQ(*back.terrain.dem_vertical_offset_m, metrics["terrain"]["vertical_offset_m"].get<double>());
+  runScenario(back, {tmp.dir / "again", false});
   int files = 0;
   for (const auto& e : fs::recursive_directory_iterator(tmp.dir / "run")) {
     if (!e.is_regular_file() || e.path().filename() == "metrics.json") continue;
