@@ -252,6 +252,29 @@ TEST(DemRefusals, EachCauseIsOneLineNamingTheFileAndKey) {
               writeDemGeoTiff(p, v, 101, 101, {f.west, 0.25, 0.01, f.north, 0.01, -0.25}, epsgWkt(32633), {});
             }),
             "D/dem.yaml: terrain.dem: D/t.tif: rotated geotransform (terms 2 and 4: 0.01, 0.01); expected a north-up DEM");
+  EXPECT_EQ(refusal([&](const fs::path& p) {
+              std::vector<float> v(101 * 101, 1.0f);
+              writeDemGeoTiff(p, v, 101, 101, {f.west, 0.25, 0, f.north - 25.25, 0, 0.25}, epsgWkt(32633), {});
+            }),
+            "D/dem.yaml: terrain.dem: D/t.tif: expected north-up pixels (geotransform terms 1 > 0 and 5 < 0), got "
+            "0.25 and 0.25");
+  EXPECT_EQ(refusal([&](const fs::path& p) {
+              GDALDatasetH ds = GDALCreate(GDALGetDriverByName("GTiff"), p.c_str(), 4, 4, 1, GDT_Float32, nullptr);
+              GDALSetProjection(ds, epsgWkt(32633).c_str());
+              GDALClose(ds);
+            }),
+            "D/dem.yaml: terrain.dem: D/t.tif: no geotransform: the DEM is not georeferenced");
+  EXPECT_EQ(refusal([&](const fs::path& p) {
+              f.write(p, flat, epsgWkt(32633));
+              GDALDatasetH ds = GDALOpen(p.c_str(), GA_Update);
+              GDALSetRasterUnitType(GDALGetRasterBand(ds, 1), "ft");
+              GDALClose(ds);
+            }),
+            "D/dem.yaml: terrain.dem: D/t.tif: heights in 'ft'; expected metres");
+  EXPECT_EQ(refusal([&](const fs::path& p) {
+              writeDemGeoTiff(p, {1.0f, 1.0f}, 1, 2, {f.west, 0.25, 0, f.north, 0, -0.25}, epsgWkt(32633), {});
+            }),
+            "D/dem.yaml: terrain.dem: D/t.tif: expected at least 2 x 2 pixels, got 2 x 1");
   // The path is checked by the reader, as mjcf's is.
   test::TempDir tmp;
   std::ofstream(tmp.dir / "dem.yaml") << "name: x\nterrain: {kind: dem, dem: none.tif}\nviews: [{xyz_m: [0, 0, 3]}]\n";
