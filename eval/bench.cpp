@@ -1,4 +1,5 @@
 #include "eval/bench.hpp"
+#include "eval/dem.hpp"
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/global_control.h>
@@ -293,9 +294,14 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
       fs::remove_all(dir, ec);
     }
   } cleanup{dir};
+  const auto terrain = [&] {  // a DEM is the base surface of its kind (eval/dem.hpp)
+    if (sc.terrain.kind == terrains::TerrainKind::Dem)
+      return terrains::makeTerrain(sc.terrain, sc.seed, readScenarioDem(sc).heights);
+    return terrains::makeTerrain(sc.terrain, sc.seed);
+  };
   const sim::World world = sc.terrain.kind == terrains::TerrainKind::Mjcf
                                ? sim::World::load(sc.terrain.mjcf)
-                               : sim::World::load(sim::writeWorld(terrains::makeTerrain(sc.terrain, sc.seed), dir, "bench"));
+                               : sim::World::load(sim::writeWorld(terrain(), dir, "bench"));
   const sim::RayScene scene(world);
   const sim::ErimScanner scanner(scene, sc.sensor);
   const auto [i, j] = sc.matching->pairs.front();

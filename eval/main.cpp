@@ -9,6 +9,7 @@
 
 #include "eval/basin.hpp"
 #include "eval/bench.hpp"
+#include "eval/dem.hpp"
 #include "eval/experiment.hpp"
 #include "eval/io.hpp"
 #include "eval/report.hpp"
@@ -80,6 +81,13 @@ int main(int argc, char** argv) {
                                                 "killed before it ended); register only the rest");
 
   std::string report_dir, report_out;
+  std::string make_dem_out;
+  std::uint64_t make_dem_seed = 1;
+  auto* make_dem = app.add_subcommand("make-dem", "Write the sample DEM (a HiRISE-like 1 m Mars DTM of the documented "
+                                                  "procedural model, docs/terrains.md) as a GeoTIFF.");
+  make_dem->add_option("--out,-o", make_dem_out, "GeoTIFF to write (scenarios/dem/sample_dtm.tif is seed 1)")->required();
+  make_dem->add_option("--seed", make_dem_seed, "Seed of the fBm and the craters")->capture_default_str();
+
   auto* report = app.add_subcommand("report", "Write one self-contained HTML report of a run, sweep or basin directory: "
                                               "the scenario, every picture embedded, the metrics as tables, the goals, "
                                               "a sweep's plots against its axes (see docs/report.md).");
@@ -217,6 +225,9 @@ int main(int argc, char** argv) {
         mergeBasin(sc, basin_opt);
       else
         runBasin(sc, basin_opt);
+    } else if (*make_dem) {
+      writeSampleDem(make_dem_out, make_dem_seed);
+      std::fprintf(stderr, "ambler: wrote %s\n", make_dem_out.c_str());
     } else if (*report) {
       std::filesystem::path out = report_out.empty() ? std::filesystem::path(report_dir) / "report.html"
                                                      : std::filesystem::path(report_out);

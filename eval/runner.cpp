@@ -23,7 +23,10 @@ nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
   nlohmann::ordered_json metrics = std::move(state.metrics);
   metrics["timing_s"] = std::move(state.timing);
   metrics["timing_s"]["total"] = total.seconds();
-  writeText(state.out / "scenario.resolved.yaml", resolvedYaml(sc));
+  // Defaults the world stage found in a file (a DEM's centre and offset) are written as values.
+  Scenario resolved = sc;
+  if (state.terrain_resolved) resolved.terrain = *state.terrain_resolved;
+  writeText(state.out / "scenario.resolved.yaml", resolvedYaml(resolved));
   writeJson(state.out / "metrics.json", metrics);
   state.say("wrote     " + (state.out / "metrics.json").string() + ", " + (state.out / "terrain.png").string() +
             ", " + (state.out / "scans").string() + "/, " + (sc.map ? (state.out / "maps").string() + "/, " : std::string()) +

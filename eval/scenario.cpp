@@ -52,7 +52,8 @@ terrains::TerrainSpec readTerrain(const Reader& reader, const YAML::Node& node,
                                   const fs::path& file) {
   const Fields f(reader, node, "terrain",
                  {"kind", "size_m", "cell_m", "relief_m", "hurst", "slope_deg", "sinusoid", "steps",
-                  "rocks", "craters", "mjcf"});
+                  "rocks", "craters", "mjcf", "dem", "window_m", "resample_m", "centre_m",
+                  "vertical_offset_m"});
   terrains::TerrainSpec t;
   std::vector<std::string_view> kind_names;
   for (const auto& [name, kind] : kKinds) kind_names.push_back(name);
@@ -62,10 +63,44 @@ terrains::TerrainSpec readTerrain(const Reader& reader, const YAML::Node& node,
     if (name == kind_name) t.kind = kind;
   }
 
-  if (const auto size = f.numbers<2>("size_m", {0.0, 500.0, true, false})) {
+  // The DEM-only keys: refused with any other kind before their values are read.
+  for (const char* key : {"dem", "window_m", "resample_m", "centre_m", "vertical_offset_m"}) {
+    if (t.kind != TerrainKind::Dem && f.get(key)) {
+      reader.fail(f.pathOf(key), "only allowed with kind: dem (kind is " + std::string(kind_name) + ")");
+    }
+  }
+
+  const Range size_range{0.0, 500.0, true, false}, cell_range{0.0, 1.0, true, false};
+  if (const auto size = f.numbers<2>("size_m", size_range)) {
     t.size_m = {(*size)[0], (*size)[1]};
   }
-  t.cell_m = f.number("cell_m", {0.0, 1.0, true, false}, t.cell_m);
+  t.cell_m = f.number("cell_m", cell_range, t.cell_m);
+  if (t.kind == TerrainKind::Dem) {
+    // The DEM window is the terrain's extent and it is resampled at the heightfield's spacing:
+    // window_m is size_m and resample_m is cell_m, named from the DEM's side. Either name may be
+    // given; both given must agree (docs/scenario.md, "terrain.kind: dem").
+    if (const auto window = f.numbers<2>("window_m", size_range)) {
+      const Eigen::Vector2d w{(*window)[0], (*window)[1]};
+      if (f.get("size_m") && w != t.size_m) {
+        reader.fail(f.pathOf("window_m"), "expected size_m ([" + shortest(t.size_m.x()) + ", " +
+                                              shortest(t.size_m.y()) +
+                                              "]) or nothing: the DEM window is the terrain's extent, got [" +
+                                              shortest(w.x()) + ", " + shortest(w.y()) + "]");
+      }
+      t.size_m = w;
+    }
+    if (f.get("resample_m")) {
+      const double r = f.number("resample_m", cell_range, t.cell_m);
+      if (f.get("cell_m") && r != t.cell_m) {
+        reader.fail(f.pathOf("resample_m"), "expected cell_m (" + shortest(t.cell_m) +
+                                                ") or nothing: the DEM is resampled at the heightfield's spacing, got " +
+                                                shortest(r));
+      }
+      t.cell_m = r;
+    }
+    if (const auto centre = f.numbers<2>("centre_m", kAny)) t.dem_centre_m = Eigen::Vector2d{(*centre)[0], (*centre)[1]};
+    if (f.get("vertical_offset_m")) t.dem_vertical_offset_m = f.number("vertical_offset_m", kAny, 0.0);
+  }
   // Samples per side as terrains::makeTerrain counts them.
   const double samples_x = std::round(t.size_m.x() / t.cell_m) + 1;
   const double samples_y = std::round(t.size_m.y() / t.cell_m) + 1;
@@ -175,6 +210,21 @@ terrains::TerrainSpec readTerrain(const Reader& reader, const YAML::Node& node,
                             world.string() + ")");
     }
     t.mjcf = world.string();
+  }
+  if (t.kind == TerrainKind::Dem) {
+    // As mjcf: relative to the scenario's directory, stored absolute and normalised. The file's
+    // contents (GeoTIFF, CRS, nodata, window) are checked by the world stage (eval/dem.hpp), before
+    // the run writes anything.
+    const std::string path = f.pathOf("dem");
+    const std::string text = reader.string(f.required("dem"), path);
+    if (text.empty()) reader.fail(path, "expected the path of a GeoTIFF DEM, got ''");
+    std::error_code ec;
+    fs::path dem = fs::path(text).is_absolute() ? fs::path(text) : file.parent_path() / text;
+    dem = fs::absolute(dem, ec).lexically_normal();
+    if (ec || !fs::is_regular_file(dem, ec)) {
+      reader.fail(path, "cannot find the DEM file " + inQuotes(text) + " (looked for " + dem.string() + ")");
+    }
+    t.dem = dem.string();
   }
   return t;
 }

@@ -15,13 +15,14 @@ using terrains::TerrainKind;
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-constexpr std::array<std::pair<std::string_view, TerrainKind>, 6> kKinds{{
+constexpr std::array<std::pair<std::string_view, TerrainKind>, 7> kKinds{{
     {"plane", TerrainKind::Plane},
     {"fractal", TerrainKind::Fractal},
     {"sinusoid", TerrainKind::Sinusoid},
     {"steps", TerrainKind::Steps},
     {"mars", TerrainKind::Mars},
     {"mjcf", TerrainKind::Mjcf},
+    {"dem", TerrainKind::Dem},
 }};
 
 // Number text, defined in scenario_writer.cpp: degToRad is how the reader turns degrees into

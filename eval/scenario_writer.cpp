@@ -131,6 +131,15 @@ std::string resolvedYaml(const Scenario& s) {
          ", sfd_exponent: " + num(t.craters->sfd_exponent) + "}\n";
   }
   if (t.kind == TerrainKind::Mjcf) y += "  mjcf: " + yamlQuoted(t.mjcf) + "\n";
+  if (t.kind == TerrainKind::Dem) {
+    y += "  dem: " + yamlQuoted(t.dem) + "\n";
+    y += "  window_m: " + list({num(t.size_m.x()), num(t.size_m.y())}) + "\n";
+    y += "  resample_m: " + num(t.cell_m) + "\n";
+    // Absent: the DEM's centre and its height there, found in the file; a run's resolved scenario
+    // has them (the world stage fills them in, eval/runner.cpp).
+    if (t.dem_centre_m) y += "  centre_m: " + list({num(t.dem_centre_m->x()), num(t.dem_centre_m->y())}) + "\n";
+    if (t.dem_vertical_offset_m) y += "  vertical_offset_m: " + num(*t.dem_vertical_offset_m) + "\n";
+  }
 
   const auto& c = s.sensor;
   y += "sensor:\n";

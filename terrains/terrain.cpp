@@ -95,15 +95,10 @@ void addStep(Heightfield& g, const StepSpec& s) {
     if (g.position(0, c).x() > s.x_m) g.heights().col(c).array() += s.height_m;
 }
 
-}  // namespace
-
-Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed) {
-  checkSpec(spec);
-  const int cols = int(std::round(spec.size_m.x() / spec.cell_m)) + 1;
-  const int rows = int(std::round(spec.size_m.y() / spec.cell_m)) + 1;
-  const Eigen::Vector2d origin(-(cols - 1) * spec.cell_m / 2.0, -(rows - 1) * spec.cell_m / 2.0);
-  Terrain terrain{Heightfield(rows, cols, spec.cell_m, origin), {}};
+Terrain compose(const TerrainSpec& spec, std::uint64_t seed, const HeightMatrix* base) {
+  Terrain terrain{terrainGrid(spec), {}};
   Heightfield& ground = terrain.ground;
+  if (base) ground.heights() = *base;
 
   const TerrainKind kind = spec.kind;
   addTilt(ground, spec.slope_deg);
@@ -118,6 +113,32 @@ Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed) {
   if (const auto rocks = rocksOf(spec))
     terrain.rocks = makeRocks(*rocks, ground, base::streamKey(seed, kRockStream));
   return terrain;
+}
+
+}  // namespace
+
+Heightfield terrainGrid(const TerrainSpec& spec) {
+  checkSpec(spec);
+  const int cols = int(std::round(spec.size_m.x() / spec.cell_m)) + 1;
+  const int rows = int(std::round(spec.size_m.y() / spec.cell_m)) + 1;
+  const Eigen::Vector2d origin(-(cols - 1) * spec.cell_m / 2.0, -(rows - 1) * spec.cell_m / 2.0);
+  return Heightfield(rows, cols, spec.cell_m, origin);
+}
+
+Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed) {
+  if (spec.kind == TerrainKind::Dem) fail("kind dem is built on its base heights: makeTerrain(spec, seed, base)");
+  return compose(spec, seed, nullptr);
+}
+
+Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed, const HeightMatrix& base) {
+  if (spec.kind != TerrainKind::Dem) fail("base heights are given to kind dem only");
+  const Heightfield grid = terrainGrid(spec);  // checks the spec first
+  const int rows = grid.rows(), cols = grid.cols();
+  if (base.rows() != rows || base.cols() != cols)
+    fail("base heights are " + std::to_string(base.rows()) + " x " + std::to_string(base.cols()) +
+         ", the grid is " + std::to_string(rows) + " x " + std::to_string(cols));
+  if (!base.allFinite()) fail("base heights must be finite");
+  return compose(spec, seed, &base);
 }
 
 }  // namespace ambler::terrains

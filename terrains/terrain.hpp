@@ -11,7 +11,9 @@
 
 namespace ambler::terrains {
 
-enum class TerrainKind { Plane, Fractal, Sinusoid, Steps, Mars, Mjcf };
+// Dem: a given base surface (heights on the spec's grid, e.g. a digital elevation model resampled by
+// eval/dem.hpp; terrains never reads files) with the components below added as for Plane.
+enum class TerrainKind { Plane, Fractal, Sinusoid, Steps, Mars, Mjcf, Dem };
 
 struct SinusoidSpec {
   double amplitude_m = 0.05;
@@ -51,6 +53,12 @@ struct TerrainSpec {
   std::optional<RockSpec> rocks;
   std::optional<CraterSpec> craters;
   std::string mjcf;                    // kind Mjcf: path of the MuJoCo world to load
+  // Kind Dem (docs/scenario.md, "terrain.kind: dem"): where the heights come from. Read by eval/dem.hpp,
+  // never by terrains; the DEM window is the grid's extent (size_m) sampled at cell_m.
+  std::string dem;                                 // absolute path of the GeoTIFF
+  std::optional<Eigen::Vector2d> dem_centre_m;     // window centre in the DEM's CRS; absent: the DEM's centre
+  std::optional<double> dem_vertical_offset_m;     // world z = DEM height − offset; absent: the DEM's
+                                                   // height at the window centre (so z = 0 there)
 };
 
 // A convex rock mesh: vertices relative to `center` (world frame), faces counter-clockwise
@@ -68,8 +76,18 @@ struct Terrain {
   std::vector<Rock> rocks;
 };
 
-// Builds the terrain of a spec (any kind but Mjcf). Same spec and seed, same terrain, bit for bit.
-// Throws std::invalid_argument for a spec it cannot build.
+// The grid every kind's heightfield has: cols = round(size_x/cell) + 1, rows = round(size_y/cell) + 1,
+// centred on the origin, all heights 0.
+Heightfield terrainGrid(const TerrainSpec& spec);
+
+// Builds the terrain of a spec (any kind but Mjcf and Dem). Same spec and seed, same terrain, bit for
+// bit. Throws std::invalid_argument for a spec it cannot build.
 Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed);
+
+// The same on a given base surface: `base` holds the heights of terrainGrid(spec) (rows × cols, row 0
+// at the smallest y); the tilt, sinusoid, steps, craters and rocks of the spec are added on top as for
+// kind Plane, rocks placed on the result. Kind Dem only; throws std::invalid_argument for another kind,
+// a base of the wrong shape or a non-finite height.
+Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed, const HeightMatrix& base);
 
 }  // namespace ambler::terrains

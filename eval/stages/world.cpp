@@ -6,6 +6,7 @@
 #include <optional>
 #include <string>
 
+#include "eval/dem.hpp"
 #include "eval/figures.hpp"
 #include "eval/io.hpp"
 #include "eval/scenario_internal.hpp"
@@ -57,8 +58,9 @@ void checkView(const Scenario& sc, std::size_t k, const std::optional<double>& s
   const Eigen::Vector3d& p = sc.views[k].xyz_m;
   const std::string where = (sc.file.empty() ? std::string("<string>") : sc.file.string()) + ": views[" +
                             std::to_string(k) + "].xyz_m: ";
-  const std::string got = "[" + scenario_detail::shortest(p.x()) + ", " + scenario_detail::shortest(p.y()) + ", " +
-                          scenario_detail::shortest(p.z()) + "]";
+  std::string got = "[";  // (appended, not "[" + ...: GCC 12 warns a false -Wrestrict on that)
+  got += scenario_detail::shortest(p.x()) + ", " + scenario_detail::shortest(p.y()) + ", " +
+         scenario_detail::shortest(p.z()) + "]";
   if (!surface)
     throw ScenarioError(where + "expected a sensor over the terrain, got " + got + ", where there is no ground");
   if (!free_below || !(p.z() > *surface))
@@ -86,7 +88,10 @@ void run(RunState& s) {
     s.world_xml = s.out / "world" / "world.xml";
     s.say("world     " + sc.terrain.mjcf + " (" + std::to_string(s.world->geomCount()) + " geoms)");
   } else {
-    const terrains::Terrain terrain = terrains::makeTerrain(sc.terrain, sc.seed);
+    std::optional<DemSurface> dem;
+    if (sc.terrain.kind == terrains::TerrainKind::Dem) dem = readScenarioDem(sc);  // may refuse: before any file
+    const terrains::Terrain terrain =
+        dem ? terrains::makeTerrain(sc.terrain, sc.seed, dem->heights) : terrains::makeTerrain(sc.terrain, sc.seed);
     for (std::size_t k = 0; k < sc.views.size(); ++k)
       checkView(sc, k, surfaceAt(terrain, sc.views[k].xyz_m.x(), sc.views[k].xyz_m.y()), true);
     createOutDir(s.out);
@@ -97,6 +102,21 @@ void run(RunState& s) {
     s.say("world     " + std::to_string(terrain.ground.rows()) + "x" + std::to_string(terrain.ground.cols()) +
           " heightfield, " + std::to_string(terrain.rocks.size()) + " rocks -> " + xml.string());
     s.scene = std::make_unique<sim::RayScene>(*s.world);
+    if (dem) {
+      // Map rasters sit on the DEM: its CRS, the world origin at the window centre.
+      s.geo = dem->frame;
+      s.terrain_resolved = sc.terrain;  // scenario.resolved.yaml writes the centre and offset used
+      s.terrain_resolved->dem_centre_m = Eigen::Vector2d(dem->frame.origin_x_m, dem->frame.origin_y_m);
+      s.terrain_resolved->dem_vertical_offset_m = dem->vertical_offset_m;
+      s.metrics["terrain"] = {{"dem_crs", dem->crs_name},
+                              {"dem_pixel_m", {dem->pixel_m[0], dem->pixel_m[1]}},
+                              {"origin_en_m", {dem->frame.origin_x_m, dem->frame.origin_y_m}},
+                              {"vertical_offset_m", dem->vertical_offset_m}};
+      const double off = dem->vertical_offset_m;
+      s.say("world     DEM " + sc.terrain.dem + " (" + dem->crs_name + "): world origin at E " +
+            scenario_detail::shortest(dem->frame.origin_x_m) + ", N " + scenario_detail::shortest(dem->frame.origin_y_m) +
+            ", z = DEM height " + (off < 0 ? "+ " : "- ") + metres(std::abs(off)) + " m");
+    }
   }
   s.truth = std::make_unique<sim::GroundTruth>(*s.scene);
   s.addTime("world", t.seconds());

@@ -151,6 +151,35 @@ printf 'name: x\nterrain: {kind: mjcf, mjcf: box.xml}\nviews: [{xyz_m: [5, 0, 2]
 expect_error mjcf_view_outside_world 'mjcf_outside\.yaml: views\[0\]\.xyz_m: expected a sensor over the terrain, got \[5, 0, 2\], where there is no ground' run mjcf_outside.yaml --out out
 printf 'name: x\nterrain: {kind: mjcf, mjcf: box.xml}\nviews: [{xyz_m: [0, 0, -2]}]\n' >mjcf_below.yaml
 expect_error mjcf_view_below_ground 'mjcf_below\.yaml: views\[0\]\.xyz_m: expected the sensor above the terrain, whose surface is at z = 0\.000 there, got z = -2' run mjcf_below.yaml --out out
+# ---- DEM terrains (terrain.kind: dem): small GeoTIFFs made with gdal_translate from an ASCII grid
+{ printf 'ncols 41\nnrows 41\nxllcorner 500000\nyllcorner 4100000\ncellsize 1\nNODATA_value -9999\n'
+  for r in $(seq 41); do for c in $(seq 41); do if ((r == 21 && c == 22)); then printf -- '-9999 '; else printf '1 '; fi; done; echo; done
+} >grid.asc
+gdal_translate -q -a_srs EPSG:4326 grid.asc geo.tif
+gdal_translate -q grid.asc nocrs.tif
+gdal_translate -q -a_srs EPSG:2227 grid.asc feet.tif
+gdal_translate -q -a_srs EPSG:32633 grid.asc hole.tif
+echo 'not a tiff' >text.tif
+rm -f ./*.aux.xml
+dem() { printf 'name: x\nterrain: {kind: dem, dem: %s, size_m: [10, 10], cell_m: 0.5%s}\nviews: [{xyz_m: [0, 0, 3]}]\n' "$2" "${3-}" >"$1"; }
+dem nodem.yaml none.tif
+expect_error dem_missing "nodem\.yaml: terrain\.dem: cannot find the DEM file 'none\.tif' \(looked for /" run nodem.yaml --out out
+dem notdem.yaml text.tif
+expect_error dem_not_a_geotiff 'notdem\.yaml: terrain\.dem: /.*/text\.tif: not a GeoTIFF GDAL can read' run notdem.yaml --out out
+dem geo.yaml geo.tif
+expect_error dem_geographic "geo\.yaml: terrain\.dem: /.*/geo\.tif: geographic CRS 'WGS 84' \(degrees\); expected a projected CRS in metres" run geo.yaml --out out
+dem nocrs.yaml nocrs.tif
+expect_error dem_no_crs 'nocrs\.yaml: terrain\.dem: /.*/nocrs\.tif: no coordinate reference system; expected a projected CRS in metres' run nocrs.yaml --out out
+dem feet.yaml feet.tif
+expect_error dem_feet "feet\.yaml: terrain\.dem: /.*/feet\.tif: linear unit 'US survey foot' \(0\.30480060960121924 m\); expected a projected CRS in metres" run feet.yaml --out out
+dem hole.yaml hole.tif
+expect_error dem_nodata 'hole\.yaml: terrain\.dem: /.*/hole\.tif: 1 nodata pixel under the window \(the first at column 21, row 20\); expected none: move or shrink the window' run hole.yaml --out out
+dem big.yaml hole.tif ', centre_m: [500038, 4100020]'
+expect_error dem_window_beyond 'big\.yaml: terrain\.window_m: /.*/hole\.tif: the window of 10 x 10 m centred at \(500038, 4100020\) reaches beyond the DEM.s outermost pixel centres \(E 500000\.5 to 500040\.5, N 4100000\.5 to 4100040\.5\)' run big.yaml --out out
+dem twins.yaml hole.tif ', window_m: [12, 10]'
+expect_error dem_window_not_size 'twins\.yaml: terrain\.window_m: expected size_m \(\[10, 10\]\) or nothing: the DEM window is the terrain.s extent, got \[12, 10\]' run twins.yaml --out out
+printf 'name: x\nterrain: {kind: plane, dem: hole.tif}\nviews: [{xyz_m: [0, 0, 1]}]\n' >demplane.yaml
+expect_error dem_key_other_kind 'demplane\.yaml: terrain\.dem: only allowed with kind: dem \(kind is plane\)' run demplane.yaml --out out
 
 # ---- Sweep files (base.yaml: a valid scenario beside them)
 scenario base.yaml 'map: {}\n'
@@ -190,7 +219,7 @@ expect_error_after_start sweep_run_refused 'runfail\.yaml: run 1 \(views\.0\.xyz
 sweep ok.yaml 'axes: {seed: [1, 2]}\n'
 expect_error unknown_option 'The following argument was not expected: --colour' run base.yaml --out out --colour
 expect_error missing_required_option '--out is required' run base.yaml
-expect_error unknown_command 'walk: unknown command \(expected one of run, sweep, basin, report, bench, experiment; see --help\)' walk base.yaml
+expect_error unknown_command 'walk: unknown command \(expected one of run, sweep, basin, make-dem, report, bench, experiment; see --help\)' walk base.yaml
 expect_error shard_malformed '--shard: expected K/N with 1 <= K <= N \(shard K of N, 1-based\), got "3/2"' sweep ok.yaml --out out --shard 3/2
 expect_error shard_too_many '--shard: 3/3: the sweep has 2 runs, so at most 2 shards' sweep ok.yaml --out out --shard 3/3
 expect_error keep_unknown '--keep: expected one of none, metrics, all, got "some"' sweep ok.yaml --out out --keep some

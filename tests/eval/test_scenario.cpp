@@ -172,7 +172,7 @@ TEST(ScenarioExamples, EveryExampleLoadsAndRoundTrips) {
     names.insert(entry.path().stem().string());
     expectRoundTrip(s);
   }
-  for (const char* name : {"demo", "plane", "ledge", "mars"})
+  for (const char* name : {"demo", "plane", "ledge", "mars", "dem"})
     EXPECT_TRUE(names.count(name)) << name;
 }
 
@@ -456,6 +456,71 @@ TEST(ScenarioRoundTrip, MjcfPathIsResolvedAgainstTheScenarioDirectory) {
   expectRoundTrip(s);
 }
 
+TEST(ScenarioRoundTrip, DemPathAndKeysReadBack) {
+  const TempDir dir;
+  fs::create_directories(dir.path / "dems");
+  std::ofstream(dir.path / "dems" / "a.tif") << "not read by the scenario reader\n";
+  const fs::path file = dir.path / "d.yaml";
+  // window_m and resample_m are the DEM-side names of size_m and cell_m.
+  std::ofstream(file) << "name: d\nterrain: {kind: dem, dem: dems/../dems/a.tif, window_m: [12, 8], resample_m: 0.1}\n"
+                         "views: [{xyz_m: [0, 0, 1]}]\n";
+  const Scenario s = loadScenario(file);
+  EXPECT_EQ(fs::path(s.terrain.dem), (fs::absolute(dir.path) / "dems" / "a.tif").lexically_normal());
+  EXPECT_EQ(s.terrain.size_m, Eigen::Vector2d(12, 8));
+  EXPECT_EQ(s.terrain.cell_m, 0.1);
+  EXPECT_FALSE(s.terrain.dem_centre_m);
+  EXPECT_FALSE(s.terrain.dem_vertical_offset_m);
+  const std::string resolved = resolvedYaml(s);
+  EXPECT_NE(resolved.find("  window_m: [12, 8]\n  resample_m: 0.1\n"), std::string::npos) << resolved;
+  expectRoundTrip(s);
+  // The same from another directory: the stored path is absolute.
+  EXPECT_EQ(parseScenario(resolved, "elsewhere/r.yaml").terrain.dem, s.terrain.dem);
+  std::ofstream(file) << "name: d\nterrain: {kind: dem, dem: dems/a.tif, size_m: [12, 8], window_m: [12, 8], "
+                         "centre_m: [4000.5, 1093000.25], vertical_offset_m: -2560.125}\nviews: [{xyz_m: [0, 0, 1]}]\n";
+  const Scenario c = loadScenario(file);
+  EXPECT_EQ(*c.terrain.dem_centre_m, Eigen::Vector2d(4000.5, 1093000.25));
+  EXPECT_EQ(*c.terrain.dem_vertical_offset_m, -2560.125);
+  expectRoundTrip(c);
+}
+
+TEST(ScenarioErrors, DemKeysAndTheirTwins) {
+  const TempDir dir;
+  std::ofstream(dir.path / "a.tif") << "x\n";
+  const auto error = [&](const std::string& terrain) {
+    try {
+      parseScenario("name: t\nterrain: " + terrain + "\nviews: [{xyz_m: [0, 0, 1]}]\n", dir.path / "x.yaml");
+    } catch (const ScenarioError& e) {
+      std::string m = e.what();
+      return m.substr(m.find(": ") + 2);
+    }
+    return std::string("(accepted)");
+  };
+  EXPECT_EQ(error("{kind: plane, window_m: [3, 3]}"), "terrain.window_m: only allowed with kind: dem (kind is plane)");
+  EXPECT_EQ(error("{kind: mars, dem: a.tif}"), "terrain.dem: only allowed with kind: dem (kind is mars)");
+  EXPECT_EQ(error("{kind: dem}"), "terrain.dem: missing required key");
+  EXPECT_EQ(error("{kind: dem, dem: ''}"), "terrain.dem: expected the path of a GeoTIFF DEM, got ''");
+  EXPECT_EQ(error("{kind: dem, dem: a.tif, size_m: [20, 20], window_m: [30, 20]}"),
+            "terrain.window_m: expected size_m ([20, 20]) or nothing: the DEM window is the terrain's extent, got "
+            "[30, 20]");
+  EXPECT_EQ(error("{kind: dem, dem: a.tif, cell_m: 0.05, resample_m: 0.1}"),
+            "terrain.resample_m: expected cell_m (0.05) or nothing: the DEM is resampled at the heightfield's "
+            "spacing, got 0.1");
+  EXPECT_EQ(error("{kind: dem, dem: a.tif, resample_m: 2}"), "terrain.resample_m: expected a number in (0, 1], got 2");
+  EXPECT_EQ(error("{kind: dem, dem: a.tif, centre_m: [1, .nan]}"),
+            "terrain.centre_m[1]: expected a finite number, got .nan");
+  EXPECT_EQ(error("{kind: dem, dem: a.tif, size_m: [20, 20], window_m: [20, 20], cell_m: 0.1, resample_m: 0.1}"),
+            "(accepted)");
+  // Views stand over the window, as over any generated terrain.
+  try {
+    parseScenario("name: t\nterrain: {kind: dem, dem: a.tif, window_m: [6, 6]}\nviews: [{xyz_m: [4, 0, 1]}]\n",
+                  dir.path / "x.yaml");
+    ADD_FAILURE() << "accepted";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("views[0].xyz_m: expected x in [-3, 3] and y in [-3, 3]"), std::string::npos)
+        << e.what();
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Errors: one line, "<file>: <key path>: <what is wrong>"
 
@@ -528,7 +593,7 @@ TEST(ScenarioErrors, WrongTypes) {
   expectError(kMinimal + "map: {shadows: yes}\n", "map.shadows",
               "expected one of gnc, none, got 'yes'");
   expectError("name: t\nterrain: {kind: fractl}\nviews: [{xyz_m: [0, 0, 1]}]\n", "terrain.kind",
-              "expected one of plane, fractal, sinusoid, steps, mars, mjcf, got 'fractl' (did you "
+              "expected one of plane, fractal, sinusoid, steps, mars, mjcf, dem, got 'fractl' (did you "
               "mean fractal?)");
   expectError("name: t\nterrain: {kind: plane}\nviews: {xyz_m: [0, 0, 1]}\n", "views",
               "expected a non-empty list of views, got a mapping");

@@ -22,6 +22,34 @@ TerrainSpec spec(TerrainKind kind, Eigen::Vector2d size = {4.0, 3.0}, double cel
   return s;
 }
 
+// Kind Dem: the given heights are the base; tilt, steps, craters and rocks go on top as for Plane.
+TEST(Terrain, DemKindIsBuiltOnItsBaseHeights) {
+  TerrainSpec s = spec(TerrainKind::Dem, {3.0, 2.0}, 0.1);
+  const Heightfield grid = terrainGrid(s);
+  ASSERT_EQ(grid.rows(), 21);
+  ASSERT_EQ(grid.cols(), 31);
+  HeightMatrix base(grid.rows(), grid.cols());
+  for (int r = 0; r < grid.rows(); ++r)
+    for (int c = 0; c < grid.cols(); ++c) base(r, c) = 0.25 * std::sin(0.7 * c) + 0.01 * r;
+  EXPECT_EQ(makeTerrain(s, 3, base).ground.heights(), base);
+  s.slope_deg = {10.0, 0.0};
+  s.steps = {StepSpec{0.5, 0.2}};
+  const Terrain t = makeTerrain(s, 3, base);
+  TerrainSpec p = s;
+  p.kind = TerrainKind::Plane;
+  const Terrain plane = makeTerrain(p, 3);
+  // The same components as on a plane, added to the base.
+  EXPECT_LT((t.ground.heights() - (plane.ground.heights() + base)).cwiseAbs().maxCoeff(), 1e-12);
+  s.rocks = RockSpec{0.05, 0.1, 0.5};
+  EXPECT_FALSE(makeTerrain(s, 3, base).rocks.empty());
+  EXPECT_THROW(makeTerrain(s, 3), std::invalid_argument);                                // no base
+  EXPECT_THROW(makeTerrain(p, 3, base), std::invalid_argument);                          // not kind Dem
+  EXPECT_THROW(makeTerrain(s, 3, HeightMatrix::Zero(20, 31)), std::invalid_argument);    // wrong shape
+  HeightMatrix hole = base;
+  hole(3, 4) = std::nan("");
+  EXPECT_THROW(makeTerrain(s, 3, hole), std::invalid_argument);                          // not finite
+}
+
 TEST(Terrain, GridIsCentredOnTheOrigin) {
   const Terrain t = makeTerrain(spec(TerrainKind::Plane, {3.0, 2.0}, 0.1), 0);
   EXPECT_EQ(t.ground.cols(), 31);
