@@ -158,28 +158,24 @@ TEST(RenderPlot, NaNBreaksTheLine) {
   const cv::Vec3b red(0, 0, 255);
   PlotSpec spec{"", "", "", false, false,
                 {Series{"", {0, 1, 2, 3, 4}, {1, 1, kNaN, 1, 1}, cv::Scalar(red[0], red[1], red[2]), false}}};
+  // Runs of consecutive image columns holding a red pixel.
+  const auto redRuns = [&](const cv::Mat& img) {
+    int runs = 0;
+    bool in_run = false;
+    for (int c = 0; c < img.cols; ++c) {
+      bool hit = false;
+      for (int r = 0; r < img.rows && !hit; ++r) hit = near(img.at<cv::Vec3b>(r, c), red);
+      runs += hit && !in_run;
+      in_run = hit;
+    }
+    return runs;
+  };
   const cv::Mat img = renderPlot(spec, 600, 300);
   keep(img, "plot_nan.png");
-  int runs = 0;
-  bool in_run = false;
-  for (int c = 0; c < img.cols; ++c) {
-    bool hit = false;
-    for (int r = 0; r < img.rows && !hit; ++r) hit = near(img.at<cv::Vec3b>(r, c), red);
-    runs += hit && !in_run;
-    in_run = hit;
-  }
-  EXPECT_EQ(runs, 2);
+  EXPECT_EQ(redRuns(img), 2);
   // Without the NaN the same line is one run.
   spec.series[0].y[2] = 1;
-  const cv::Mat whole = renderPlot(spec, 600, 300);
-  runs = 0, in_run = false;
-  for (int c = 0; c < whole.cols; ++c) {
-    bool hit = false;
-    for (int r = 0; r < whole.rows && !hit; ++r) hit = near(whole.at<cv::Vec3b>(r, c), red);
-    runs += hit && !in_run;
-    in_run = hit;
-  }
-  EXPECT_EQ(runs, 1);
+  EXPECT_EQ(redRuns(renderPlot(spec, 600, 300)), 1);
 }
 
 // Markers where the axes put their data. renderPlot puts the frame at plotMargins (no title or
