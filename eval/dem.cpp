@@ -7,13 +7,11 @@
 #include <ogr_srs_api.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <memory>
-#include <mutex>
 #include <string>
 
-#include "base/atomic_file.hpp"
+#include "eval/gdal_internal.hpp"
 #include "eval/message_text.hpp"
 #include "eval/scenario_internal.hpp"
 #include "terrains/terrain.hpp"
@@ -24,22 +22,6 @@ namespace {
 
 using scenario_detail::shortest;
 
-void registerGdal() {
-  static std::once_flag once;
-  std::call_once(once, [] { GDALAllRegister(); });
-}
-
-// GDAL's messages are collected, never printed: a refusal is one line (docs/errors.md).
-struct QuietGdal {
-  QuietGdal() {
-    CPLPushErrorHandler(CPLQuietErrorHandler);
-    CPLErrorReset();
-  }
-  ~QuietGdal() { CPLPopErrorHandler(); }
-  QuietGdal(const QuietGdal&) = delete;
-  QuietGdal& operator=(const QuietGdal&) = delete;
-};
-
 struct DatasetCloser {
   void operator()(void* ds) const { GDALClose(ds); }
 };
@@ -48,22 +30,17 @@ using Dataset = std::unique_ptr<void, DatasetCloser>;
 // "1.5" for 1.5, rounded to a millimetre so a message stays short.
 std::string mm(double v) { return shortest(std::round(v * 1e3) / 1e3); }
 
-std::string lastGdalError() {
-  const std::string m = CPLGetLastErrorMsg();
-  return m.empty() ? std::string() : " (GDAL: " + escapedLine(m) + ")";
-}
-
 }  // namespace
 
 DemSurface readDem(const terrains::TerrainSpec& spec) {
-  registerGdal();
-  const QuietGdal quiet;
+  gdal::registerDrivers();
+  const gdal::Quiet quiet;
   const std::string file = spec.dem;
   const auto fail = [&](const std::string& cause) -> void { throw DemError(file + ": " + cause); };
 
   const char* drivers[] = {"GTiff", nullptr};
   Dataset ds(GDALOpenEx(file.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, drivers, nullptr, nullptr));
-  if (!ds) fail("not a GeoTIFF GDAL can read" + lastGdalError());
+  if (!ds) fail("not a GeoTIFF GDAL can read" + gdal::lastError());
   const int W = GDALGetRasterXSize(ds.get()), H = GDALGetRasterYSize(ds.get());
   if (GDALGetRasterCount(ds.get()) < 1) fail("no raster band");
   if (W < 2 || H < 2)
@@ -124,7 +101,7 @@ DemSurface readDem(const terrains::TerrainSpec& spec) {
   const int bw = c1 - c0 + 1, bh = r1 - r0 + 1;
   std::vector<double> block(std::size_t(bw) * std::size_t(bh));
   if (GDALRasterIO(band, GF_Read, c0, r0, bw, bh, block.data(), bw, bh, GDT_Float64, 0, 0) != CE_None)
-    fail("cannot read pixels" + lastGdalError());
+    fail("cannot read pixels" + gdal::lastError());
   int has_nodata = 0;
   const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
   long bad = 0;
@@ -185,37 +162,10 @@ DemSurface readScenarioDem(const Scenario& sc) {
 void writeDemGeoTiff(const std::filesystem::path& path, const std::vector<float>& north_up, int rows, int cols,
                      const std::array<double, 6>& geotransform, const std::string& crs_wkt,
                      std::optional<double> nodata) {
-  registerGdal();
-  const QuietGdal quiet;
-  const auto fail = [&](const std::string& what) { throw std::runtime_error(path.string() + ": " + what); };
   if (rows < 1 || cols < 1 || north_up.size() != std::size_t(rows) * std::size_t(cols))
-    fail("expected " + std::to_string(rows) + " x " + std::to_string(cols) + " heights");
-  GDALDriverH driver = GDALGetDriverByName("GTiff");
-  if (!driver) fail("GDAL has no GTiff driver");
-  static std::atomic<unsigned long> counter{0};
-  const std::string mem = "/vsimem/ambler_dem_" + std::to_string(counter++) + ".tif";
-  const char* options[] = {"COMPRESS=DEFLATE", "PREDICTOR=3", "ZLEVEL=9", nullptr};
-  GDALDatasetH ds = GDALCreate(driver, mem.c_str(), cols, rows, 1, GDT_Float32, const_cast<char**>(options));
-  if (!ds) fail("GDAL cannot create the GeoTIFF" + lastGdalError());
-  std::array<double, 6> t = geotransform;
-  bool ok = GDALSetGeoTransform(ds, t.data()) == CE_None;
-  if (!crs_wkt.empty()) ok = ok && GDALSetProjection(ds, crs_wkt.c_str()) == CE_None;
-  GDALRasterBandH band = GDALGetRasterBand(ds, 1);
-  if (nodata) ok = ok && GDALSetRasterNoDataValue(band, *nodata) == CE_None;
-  ok = ok && GDALRasterIO(band, GF_Write, 0, 0, cols, rows, const_cast<float*>(north_up.data()), cols, rows,
-                          GDT_Float32, 0, 0) == CE_None;
-  const std::string error = ok ? "" : lastGdalError();
-  GDALClose(ds);
-  if (!ok) {
-    VSIUnlink(mem.c_str());
-    fail("GDAL cannot write the GeoTIFF" + error);
-  }
-  vsi_l_offset size = 0;
-  GByte* bytes = VSIGetMemFileBuffer(mem.c_str(), &size, TRUE);
-  if (!bytes) fail("GDAL wrote no GeoTIFF");
-  const std::string data(reinterpret_cast<const char*>(bytes), static_cast<std::size_t>(size));
-  CPLFree(bytes);
-  base::writeFileAtomic(path, data);
+    throw std::runtime_error(path.string() + ": expected " + std::to_string(rows) + " x " + std::to_string(cols) +
+                             " heights");
+  gdal::writeFloat32(path, north_up.data(), rows, cols, geotransform, crs_wkt, nodata, 9);
 }
 
 std::string marsEquirectangularWkt() {

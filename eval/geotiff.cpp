@@ -12,21 +12,60 @@
 #include <string>
 
 #include "base/atomic_file.hpp"
+#include "eval/gdal_internal.hpp"
+#include "eval/message_text.hpp"
 
 namespace ambler::eval {
 
-namespace {
+namespace gdal {
 
-void registerGdal() {
+void registerDrivers() {
   static std::once_flag once;
   std::call_once(once, [] { GDALAllRegister(); });
 }
 
-[[noreturn]] void fail(const std::filesystem::path& path, const std::string& what) {
-  throw std::runtime_error(path.string() + ": " + what);
+std::string lastError() {
+  const std::string m = CPLGetLastErrorMsg();
+  return m.empty() ? std::string() : " (GDAL: " + escapedLine(m) + ")";
 }
 
-}  // namespace
+void writeFloat32(const std::filesystem::path& path, const float* north_up, int rows, int cols,
+                  const std::array<double, 6>& transform, const std::string& crs_wkt, std::optional<double> nodata,
+                  int deflate_level) {
+  registerDrivers();
+  const Quiet quiet;
+  const auto fail = [&](const std::string& what) { throw std::runtime_error(path.string() + ": " + what); };
+  if (rows < 1 || cols < 1) fail("cannot write an empty raster");
+  GDALDriverH driver = GDALGetDriverByName("GTiff");
+  if (!driver) fail("GDAL has no GTiff driver");
+  static std::atomic<unsigned long> counter{0};
+  const std::string mem = "/vsimem/ambler_geotiff_" + std::to_string(counter++) + ".tif";
+  const std::string zlevel = "ZLEVEL=" + std::to_string(deflate_level);
+  const char* options[] = {"COMPRESS=DEFLATE", "PREDICTOR=3", zlevel.c_str(), nullptr};
+  GDALDatasetH ds = GDALCreate(driver, mem.c_str(), cols, rows, 1, GDT_Float32, const_cast<char**>(options));
+  if (!ds) fail("GDAL cannot create the GeoTIFF" + lastError());
+  std::array<double, 6> t = transform;
+  bool ok = GDALSetGeoTransform(ds, t.data()) == CE_None;
+  if (!crs_wkt.empty()) ok = ok && GDALSetProjection(ds, crs_wkt.c_str()) == CE_None;
+  GDALRasterBandH band = GDALGetRasterBand(ds, 1);
+  if (nodata) ok = ok && GDALSetRasterNoDataValue(band, *nodata) == CE_None;
+  ok = ok && GDALRasterIO(band, GF_Write, 0, 0, cols, rows, const_cast<float*>(north_up), cols, rows, GDT_Float32, 0,
+                          0) == CE_None;
+  const std::string error = ok ? "" : lastError();
+  GDALClose(ds);
+  if (!ok) {
+    VSIUnlink(mem.c_str());
+    fail("GDAL cannot write the GeoTIFF" + error);
+  }
+  vsi_l_offset size = 0;
+  GByte* bytes = VSIGetMemFileBuffer(mem.c_str(), &size, TRUE);
+  if (!bytes) fail("GDAL wrote no GeoTIFF");
+  const std::string data(reinterpret_cast<const char*>(bytes), static_cast<std::size_t>(size));
+  CPLFree(bytes);
+  base::writeFileAtomic(path, data);
+}
+
+}  // namespace gdal
 
 std::string localFrameWkt() {
   return "LOCAL_CS[\"ambler world frame (x east, y north, metres)\",LOCAL_DATUM[\"ambler world origin\",0],"
@@ -43,41 +82,13 @@ std::array<double, 6> geoTransform(const perception::MapGrid& grid, const GeoFra
 
 void writeGeoTiff(const std::filesystem::path& path, const perception::Raster<float>& raster,
                   const perception::MapGrid& grid, const GeoFrame& frame) {
-  registerGdal();
-  if (raster.rows() == 0 || raster.cols() == 0) fail(path, "cannot write an empty raster");
   if (raster.rows() != grid.rows || raster.cols() != grid.cols)
-    fail(path, "the raster is " + std::to_string(raster.rows()) + " x " + std::to_string(raster.cols()) +
-                   " but its grid is " + std::to_string(grid.rows) + " x " + std::to_string(grid.cols));
-  GDALDriverH driver = GDALGetDriverByName("GTiff");
-  if (!driver) fail(path, "GDAL has no GTiff driver");
-  // The file is made in GDAL's memory file system, then written atomically like every other output.
-  static std::atomic<unsigned long> counter{0};
-  const std::string mem = "/vsimem/ambler_geotiff_" + std::to_string(counter++) + ".tif";
-  const char* options[] = {"COMPRESS=DEFLATE", "PREDICTOR=3", "INTERLEAVE=BAND", nullptr};
-  GDALDatasetH ds = GDALCreate(driver, mem.c_str(), static_cast<int>(raster.cols()), static_cast<int>(raster.rows()),
-                               1, GDT_Float32, const_cast<char**>(options));
-  if (!ds) fail(path, std::string("GDAL cannot create the GeoTIFF: ") + CPLGetLastErrorMsg());
-  std::array<double, 6> transform = geoTransform(grid, frame);
-  bool ok = GDALSetGeoTransform(ds, transform.data()) == CE_None;
-  const std::string wkt = frame.crs_wkt.empty() ? localFrameWkt() : frame.crs_wkt;
-  ok = ok && GDALSetProjection(ds, wkt.c_str()) == CE_None;
-  GDALRasterBandH band = GDALGetRasterBand(ds, 1);
-  ok = ok && GDALSetRasterNoDataValue(band, std::numeric_limits<double>::quiet_NaN()) == CE_None;
-  ok = ok && GDALRasterIO(band, GF_Write, 0, 0, static_cast<int>(raster.cols()), static_cast<int>(raster.rows()),
-                          const_cast<float*>(raster.data()), static_cast<int>(raster.cols()),
-                          static_cast<int>(raster.rows()), GDT_Float32, 0, 0) == CE_None;
-  const std::string error = ok ? "" : CPLGetLastErrorMsg();
-  GDALClose(ds);
-  if (!ok) {
-    VSIUnlink(mem.c_str());
-    fail(path, "GDAL cannot write the GeoTIFF: " + error);
-  }
-  vsi_l_offset size = 0;
-  GByte* bytes = VSIGetMemFileBuffer(mem.c_str(), &size, TRUE);
-  if (!bytes) fail(path, "GDAL wrote no GeoTIFF");
-  std::string data(reinterpret_cast<const char*>(bytes), static_cast<std::size_t>(size));
-  CPLFree(bytes);
-  base::writeFileAtomic(path, data);
+    throw std::runtime_error(path.string() + ": the raster is " + std::to_string(raster.rows()) + " x " +
+                             std::to_string(raster.cols()) + " but its grid is " + std::to_string(grid.rows) + " x " +
+                             std::to_string(grid.cols));
+  gdal::writeFloat32(path, raster.data(), grid.rows, grid.cols, geoTransform(grid, frame),
+                     frame.crs_wkt.empty() ? localFrameWkt() : frame.crs_wkt,
+                     std::numeric_limits<double>::quiet_NaN());
 }
 
 }  // namespace ambler::eval
