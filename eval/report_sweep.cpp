@@ -176,6 +176,11 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
     for (const auto& v : a.values) a.numeric = a.numeric && number(v) && std::isfinite(*number(v));
     if (a.values.size() > 1) axes.push_back(std::move(a));
   }
+  // A seed axis replicates the others: its runs are the spread at each value of the other axes,
+  // not a quantity to plot against, unless it is the only axis that varies.
+  if (axes.size() > 1)
+    axes.erase(std::remove_if(axes.begin(), axes.end(), [&](const Axis& a) { return header[a.column] == "seed"; }),
+               axes.end());
 
   // The plots: each varying metric against each axis with more than one value: at each value of
   // the axis, the median, the least and the greatest over the runs with that value.
@@ -270,7 +275,8 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
             "that meet it (docs/report.md, \"Goals\").</p>\n" + tableHtml(goals_table);
   if (!plots.empty()) {
     html += "<h2 id=\"plots\">Plots</h2>\n<p>Each metric that varies against each axis with more than one value "
-            "(drawn by gnuplot). Where several runs share an axis value (the other axes vary), the line with "
+            "(drawn by gnuplot); a seed axis is not plotted against when another axis varies: its runs are the "
+            "spread. Where several runs share an axis value (the other axes vary), the line with "
             "dots is their median and the two other lines their least and greatest value.</p>\n";
     for (const Plot& p : plots) html += figureBytesHtml(p.png, p.caption);
   }
