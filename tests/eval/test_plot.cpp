@@ -272,20 +272,25 @@ TEST(RenderPlot, DeterministicAndThreadSafe) {
   }
 }
 
-// Without gnuplot on PATH: one line that says what to install.
-TEST(RenderPlot, MissingGnuplotIsOneClearLine) {
-  const std::string path = std::getenv("PATH") ? std::getenv("PATH") : "";
-  const auto empty = std::filesystem::temp_directory_path() / "ambler-test-no-gnuplot";
-  std::filesystem::create_directories(empty);
-  ::setenv("PATH", empty.c_str(), 1);
+// What renderPlot throws with PATH set to `path` (restored after); empty when it does not throw.
+std::string errorWithPath(const std::string& path) {
+  const std::string saved = std::getenv("PATH") ? std::getenv("PATH") : "";
+  ::setenv("PATH", path.c_str(), 1);
   std::string what;
   try {
     renderPlot(sampleSpec(false), 400, 300);
   } catch (const std::runtime_error& e) {
     what = e.what();
   }
-  ::setenv("PATH", path.c_str(), 1);
-  EXPECT_EQ(what, "gnuplot not found: install gnuplot-nox (scripts/setup.sh)");
+  ::setenv("PATH", saved.c_str(), 1);
+  return what;
+}
+
+// Without gnuplot on PATH: one line that says what to install.
+TEST(RenderPlot, MissingGnuplotIsOneClearLine) {
+  const auto empty = std::filesystem::temp_directory_path() / "ambler-test-no-gnuplot";
+  std::filesystem::create_directories(empty);
+  EXPECT_EQ(errorWithPath(empty.string()), "gnuplot not found: install gnuplot-nox (scripts/setup.sh)");
 }
 
 // AMBLER_KEEP_PLOTS=DIR keeps each plot's script, which re-renders the same picture on its own.
@@ -320,14 +325,7 @@ TEST(RenderPlot, FailingGnuplotIsOneLineWithItsMessage) {
             "echo '\"plot.gp\" line 3: undefined variable: foo' >&2\nexit 1\n";
   }
   std::filesystem::permissions(dir / "gnuplot", std::filesystem::perms::owner_all);
-  ::setenv("PATH", (dir.string() + ":" + path).c_str(), 1);
-  std::string what;
-  try {
-    renderPlot(sampleSpec(false), 400, 300);
-  } catch (const std::runtime_error& e) {
-    what = e.what();
-  }
-  ::setenv("PATH", path.c_str(), 1);
+  const std::string what = errorWithPath(dir.string() + ":" + path);
   std::filesystem::remove_all(dir);
   EXPECT_EQ(what, "gnuplot failed (exit 1): \"plot.gp\" line 3: undefined variable: foo");
 }
