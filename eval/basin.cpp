@@ -27,6 +27,7 @@
 #include "eval/pair_registration.hpp"
 #include "eval/progress.hpp"
 #include "eval/stages.hpp"
+#include "eval/stats.hpp"
 #include "eval/sweep_internal.hpp"
 
 namespace ambler::eval {
@@ -122,12 +123,6 @@ struct Tally {
 };
 
 // The middle value of a non-empty list, or the mean of the two middle values.
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t h = v.size() / 2;
-  return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
-}
-
 // For each rotation, the largest translation up to which every cell reaches `level` (NaN: not
 // even the first); what basin_boundary.png draws.
 std::vector<double> boundary(const BasinGrid& g, const std::vector<double>& rate, double level) {

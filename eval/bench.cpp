@@ -1,5 +1,4 @@
 #include "eval/bench.hpp"
-#include "eval/dem.hpp"
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/global_control.h>
@@ -16,11 +15,13 @@
 #include <stdexcept>
 #include <vector>
 
+#include "eval/dem.hpp"
 #include "eval/io.hpp"
 #include "eval/progress.hpp"
 #include "eval/pair_registration.hpp"
 #include "eval/runner.hpp"
 #include "eval/scenario.hpp"
+#include "eval/stats.hpp"
 #include "perception/cartesian_mapper.hpp"
 #include "perception/footfall.hpp"
 #include "perception/iconic.hpp"
@@ -36,12 +37,6 @@ namespace ambler::eval {
 namespace fs = std::filesystem;
 
 namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 // Median seconds of `reps` runs of `f` (after one warm-up run).
 double timeMedian(int reps, const std::function<void()>& f) {
@@ -294,14 +289,9 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
       fs::remove_all(dir, ec);
     }
   } cleanup{dir};
-  const auto terrain = [&] {  // a DEM is the base surface of its kind (eval/dem.hpp)
-    if (sc.terrain.kind == terrains::TerrainKind::Dem)
-      return terrains::makeTerrain(sc.terrain, sc.seed, readScenarioDem(sc).heights);
-    return terrains::makeTerrain(sc.terrain, sc.seed);
-  };
   const sim::World world = sc.terrain.kind == terrains::TerrainKind::Mjcf
                                ? sim::World::load(sc.terrain.mjcf)
-                               : sim::World::load(sim::writeWorld(terrain(), dir, "bench"));
+                               : sim::World::load(sim::writeWorld(scenarioTerrain(sc), dir, "bench"));
   const sim::RayScene scene(world);
   const sim::ErimScanner scanner(scene, sc.sensor);
   const auto [i, j] = sc.matching->pairs.front();

@@ -159,6 +159,14 @@ DemSurface readScenarioDem(const Scenario& sc) {
   }
 }
 
+terrains::Terrain scenarioTerrain(const Scenario& sc, std::optional<DemSurface>* dem) {
+  if (sc.terrain.kind != terrains::TerrainKind::Dem) return terrains::makeTerrain(sc.terrain, sc.seed);
+  DemSurface surface = readScenarioDem(sc);
+  terrains::Terrain terrain = terrains::makeTerrain(sc.terrain, sc.seed, surface.heights);
+  if (dem) *dem = std::move(surface);
+  return terrain;
+}
+
 void writeDemGeoTiff(const std::filesystem::path& path, const std::vector<float>& north_up, int rows, int cols,
                      const std::array<double, 6>& geotransform, const std::string& crs_wkt,
                      std::optional<double> nodata) {

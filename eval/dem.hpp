@@ -48,6 +48,11 @@ DemSurface readDem(const terrains::TerrainSpec& spec);
 // (terrain.window_m for a window beyond the DEM).
 DemSurface readScenarioDem(const Scenario& sc);
 
+// The terrain of a scenario of any kind but mjcf: a DEM's (read with readScenarioDem, which may
+// refuse) with its components on top, or makeTerrain's. `dem`, when given, receives the DEM read
+// (left empty for other kinds), for the run's georeferencing.
+terrains::Terrain scenarioTerrain(const Scenario& sc, std::optional<DemSurface>* dem = nullptr);
+
 // A single-band float32 GeoTIFF (DEFLATE, floating-point predictor): `north_up` holds rows × cols
 // values, row 0 the northernmost; `geotransform` as GDAL's; `crs_wkt` empty writes no CRS; `nodata`
 // the nodata value if any. Same input, same bytes. Written atomically; throws std::runtime_error

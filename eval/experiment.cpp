@@ -184,10 +184,13 @@ void appendCell(std::string& row, const std::string& text) { row.append(" ").app
 
 // The default PNG level makes a four-panel plot twice as large.
 void writeFigure(const fs::path& path, const cv::Mat& image) {
-  std::vector<uchar> bytes;
-  if (!cv::imencode(".png", image, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+  std::string bytes;
+  try {
+    bytes = compactPngBytes(image);
+  } catch (const std::runtime_error&) {
     throw std::runtime_error(path.string() + ": could not encode image");
-  writeText(path, std::string(bytes.begin(), bytes.end()));
+  }
+  writeText(path, bytes);
 }
 
 // renderPlot puts the legend in the corner of the plot area that hides the fewest points; the

@@ -13,6 +13,7 @@
 #include "eval/experiment_internal.hpp"
 #include "eval/io.hpp"
 #include "eval/match_figures.hpp"
+#include "eval/stats.hpp"
 
 namespace ambler::eval {
 namespace {
@@ -26,13 +27,6 @@ constexpr const char* kRpyAxis = "matching.initial_error.rpy_deg";
 std::string reg(std::size_t k, const char* key) { return "registration." + std::to_string(k) + "." + key; }
 
 // The middle value, or the mean of the two middle values; NaN for none.
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  const std::size_t h = v.size() / 2;
-  return v.size() % 2 ? v[h] : 0.5 * (v[h - 1] + v[h]);
-}
-
 double maximum(const std::vector<double>& v) { return v.empty() ? kNaN : *std::max_element(v.begin(), v.end()); }
 
 // An iteration count: "22", a median between two "22.5".

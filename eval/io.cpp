@@ -90,6 +90,10 @@ void writeTiff(const std::filesystem::path& path, const perception::Raster<float
   base::writeFileAtomic(path, encode(path, ".tiff", m));
 }
 
+std::string compactPngBytes(const cv::Mat& image) {
+  return encode("PNG", ".png", image, {cv::IMWRITE_PNG_COMPRESSION, 9});
+}
+
 void writePng(const std::filesystem::path& path, const cv::Mat& image) {
   base::writeFileAtomic(path, encode(path, ".png", image));
 }

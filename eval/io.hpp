@@ -25,6 +25,9 @@ void writeText(const std::filesystem::path& path, const std::string& text);
 void writeJson(const std::filesystem::path& path, const nlohmann::ordered_json& json);
 // Single-channel float32 TIFF (NaN kept as NaN).
 void writeTiff(const std::filesystem::path& path, const perception::Raster<float>& raster);
+// The PNG bytes of an 8-bit image at zlib's highest level (figures and embedded pictures: half the
+// size of the default level for a plot). Throws std::runtime_error if OpenCV cannot encode it.
+std::string compactPngBytes(const cv::Mat& image);
 // PNG of an 8-bit image (grey or BGR).
 void writePng(const std::filesystem::path& path, const cv::Mat& image);
 // Binary little-endian PLY of points (float x, y, z).

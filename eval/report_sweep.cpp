@@ -7,15 +7,16 @@
 #include <charconv>
 #include <cmath>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <set>
 #include <tuple>
 #include <stdexcept>
 
+#include "eval/io.hpp"
 #include "eval/plot.hpp"
 #include "eval/report.hpp"
 #include "eval/report_internal.hpp"
+#include "eval/stats.hpp"
 #include "eval/sweep.hpp"
 
 namespace ambler::eval {
@@ -34,19 +35,6 @@ std::optional<double> number(const std::string& cell) {
   const auto r = std::from_chars(cell.data(), cell.data() + cell.size(), v);
   if (cell.empty() || r.ec != std::errc() || r.ptr != cell.data() + cell.size()) return std::nullopt;
   return v;
-}
-
-double median(std::vector<double> v) {
-  if (v.empty()) return kNaN;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-std::string pngBytes(const cv::Mat& img) {
-  std::vector<uchar> bytes;
-  cv::imencode(".png", img, bytes, {cv::IMWRITE_PNG_COMPRESSION, 9});
-  return std::string(bytes.begin(), bytes.end());
 }
 
 Rows readCsv(const fs::path& file, const std::string& what, const std::vector<std::string>& head) {
@@ -227,7 +215,7 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
     }
   }
   // gnuplot runs in parallel (renderPlot is thread-safe); each plot's bytes depend on its spec alone.
-  tbb::parallel_for(std::size_t(0), plots.size(), [&](std::size_t i) { plots[i].png = pngBytes(renderPlot(plots[i].spec, 640, 400)); });
+  tbb::parallel_for(std::size_t(0), plots.size(), [&](std::size_t i) { plots[i].png = compactPngBytes(renderPlot(plots[i].spec, 640, 400)); });
 
   std::string html = pageHead(title) + "<p>Sweep directory <code>" + htmlEscape(shownName(dir)) + "</code>: " +
                      std::to_string(n_runs) + (n_runs == 1 ? " run" : " runs") + ", " + std::to_string(n_axes) +

@@ -89,9 +89,7 @@ void run(RunState& s) {
     s.say("world     " + sc.terrain.mjcf + " (" + std::to_string(s.world->geomCount()) + " geoms)");
   } else {
     std::optional<DemSurface> dem;
-    if (sc.terrain.kind == terrains::TerrainKind::Dem) dem = readScenarioDem(sc);  // may refuse: before any file
-    const terrains::Terrain terrain =
-        dem ? terrains::makeTerrain(sc.terrain, sc.seed, dem->heights) : terrains::makeTerrain(sc.terrain, sc.seed);
+    const terrains::Terrain terrain = scenarioTerrain(sc, &dem);  // a DEM may refuse: before any file
     for (std::size_t k = 0; k < sc.views.size(); ++k)
       checkView(sc, k, surfaceAt(terrain, sc.views[k].xyz_m.x(), sc.views[k].xyz_m.y()), true);
     createOutDir(s.out);
