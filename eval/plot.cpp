@@ -26,6 +26,7 @@
 #include <system_error>
 
 #include "eval/io.hpp"
+#include "eval/journal.hpp"
 
 extern char** environ;  // the child's environment starts from ours (unistd.h declares it only with _GNU_SOURCE)
 
@@ -214,13 +215,6 @@ void runGnuplot(const fs::path& dir, const fs::path& script) {
   }
 }
 
-// FNV-1a, 64 bits: the kept scripts' names.
-std::uint64_t fnv1a(std::string_view s) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (const char c : s) h = (h ^ static_cast<unsigned char>(c)) * 1099511628211ull;
-  return h;
-}
-
 }  // namespace
 
 std::vector<double> niceTicks(double lo, double hi, int intervals) {
@@ -329,12 +323,8 @@ std::string gnuplotScript(const PlotSpec& spec, int width, int height, const std
 
 cv::Mat renderPlot(const PlotSpec& spec, int width, int height) {
   if (const char* keep = std::getenv("AMBLER_KEEP_PLOTS"); keep && *keep) {
-    const std::string stem = [&] {
-      char buf[32];
-      std::snprintf(buf, sizeof buf, "plot-%016llx", static_cast<unsigned long long>(
-                                                         fnv1a(gnuplotScript(spec, width, height, "plot.png"))));
-      return std::string(buf);
-    }();
+    // Named by the script's FNV-1a digest (the journal's identity digest: 16 hex digits).
+    const std::string stem = "plot-" + identityDigest(gnuplotScript(spec, width, height, "plot.png"));
     createOutDir(keep);
     writeText(fs::path(keep) / (stem + ".gp"), gnuplotScript(spec, width, height, stem + ".png"));
   }
