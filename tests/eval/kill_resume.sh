@@ -68,35 +68,39 @@ now_ms() { date +%s%3N; }
 journal_items() { local n; n=$( (cat "$1" 2>/dev/null || true) | wc -l); echo $((n > 0 ? n - 1 : 0)); }
 kill_until_done() {
   local name=$1 csv=$2 items=$3 start_ms=$4 item_ms=$5; shift 5
-  local journal="${csv%.csv}.journal" kills=0 attempts=0 rc delay_ms at="" targets pid target
+  local journal="${csv%.csv}.journal" kills=0 rc delay_ms at="" targets pid target tries
   targets=$(for ((i = 0; i < min_kills; i++)); do echo $((RANDOM % items)); done | sort -n)
   for target in $targets done; do
-    attempts=$((attempts + 1))
-    "$@" --resume -q 2>>"$tmp/$name.err" &
-    pid=$!
-    if [[ $target == done ]]; then
-      wait "$pid"
-      rc=$?
-      if ((rc != 0)); then echo "FAIL $name: the last resume exited with $rc:"; tail -3 "$tmp/$name.err"; fail=1; return; fi
-      break
-    fi
-    if (($(journal_items "$journal") >= target)); then
-      delay_ms=$((RANDOM % (start_ms + 1)))
-    else
-      while kill -0 "$pid" 2>/dev/null && (($(journal_items "$journal") < target)); do sleep 0.005; done
-      delay_ms=$((RANDOM % (item_ms + 1)))
-    fi
-    sleep "$(printf '%d.%03d' $((delay_ms / 1000)) $((delay_ms % 1000)))"
-    if kill -9 "$pid" 2>/dev/null; then
-      wait "$pid" 2>/dev/null
-      kills=$((kills + 1))
-      at+=" $(journal_items "$journal")"
-    else
+    # A kill that comes too late (the resume finished first, as on a loaded machine whose timings
+    # differ from the ones measured above) is drawn again at half the delay, so every kill moment
+    # lands on a live process however fast or slow the machine is.
+    for ((tries = 0; tries < 8; tries++)); do
+      "$@" --resume -q 2>>"$tmp/$name.err" &
+      pid=$!
+      if [[ $target == done ]]; then
+        wait "$pid"
+        rc=$?
+        if ((rc != 0)); then echo "FAIL $name: the last resume exited with $rc:"; tail -3 "$tmp/$name.err"; fail=1; return; fi
+        break
+      fi
+      if (($(journal_items "$journal") >= target)); then
+        delay_ms=$((RANDOM % (start_ms + 1) >> tries))
+      else
+        while kill -0 "$pid" 2>/dev/null && (($(journal_items "$journal") < target)); do sleep 0.005; done
+        delay_ms=$((RANDOM % (item_ms + 1) >> tries))
+      fi
+      sleep "$(printf '%d.%03d' $((delay_ms / 1000)) $((delay_ms % 1000)))"
+      if kill -9 "$pid" 2>/dev/null; then
+        wait "$pid" 2>/dev/null
+        kills=$((kills + 1))
+        at+=" $(journal_items "$journal")"
+        break
+      fi
       wait "$pid"
       rc=$?
       if ((rc != 0)); then echo "FAIL $name: a resume exited with $rc:"; tail -3 "$tmp/$name.err"; fail=1; return; fi
       at+=" (finished)"
-    fi
+    done
   done
   if ((kills < 20)); then echo "FAIL $name: only $kills kills landed on a live process"; fail=1; return; fi
   if [[ ! -f $csv ]]; then echo "FAIL $name: no $csv"; fail=1; return; fi
