@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "perception/locus_sample.hpp"
@@ -551,6 +552,45 @@ bool LocusMapper::linkedMixedPixel(int r1, int r2, const Sample& s1, const Sampl
   return departure > 3 * std::sqrt(6 * config_.sensor.rangeVariance(i_m));
 }
 
+// A bracket with edge pixels on its far side only, next to an occluding edge: its scanline r1 is
+// the near surface's last sample before the edge (the scanline beyond it, across the edge, is an
+// edge pixel past the near surface), and the line is in front of it. That sample's range cannot
+// be trusted to be the near surface's: a mixed pixel whose departure is below linkedMixedPixel's
+// threshold (3·√6·σ_p, up to 18 cm of range at 6 m with the ERIM's quantisation) passes as clean,
+// and it and its noise put the near surface's end past where it is, over the lip into the shadow.
+// So the line is taken to meet the near surface inside the bracket only where that is certain from
+// the clean samples alone: the near surface fitted to r2 and up to three scanlines past it (linear
+// in inverse range against row, as in meetsSurfaceInGap), carried to r1, with three standard
+// deviations of that extension's noise. Otherwise the line may pass the lip: the cell is unseen
+// (docs/locus.md, "Range shadows").
+bool LocusMapper::pastNearSurfaceEnd(int r1, int r2, const Sample& s1, const Sample& s2) const {
+  if (!edges_) return false;
+  const int d = r2 - r1, beyond = r1 - d;
+  if (beyond < 0 || beyond >= rows_ || !edgeAt(beyond, s1)) return false;
+  double sk = 0, sy = 0, skk = 0, sky = 0;
+  int n = 0;
+  for (int k = 0; k < 4; ++k) {
+    const double y = rangeAt(r2 + k * d, s2);
+    if (!std::isfinite(y)) break;
+    sk += k, sy += 1 / y, skk += k * k, sky += k / y, ++n;
+  }
+  if (n < 2) return false;  // no course to carry: the bracket decides, as before
+  const double k_mean = sk / n, s_kk = skk - sk * k_mean;
+  const double slope = (sky - sk * sy / n) / s_kk, at_mean = sy / n;
+  const double var_p = config_.sensor.rangeVariance(1 / at_mean);
+  // The near surface carried t scanlines from r2 towards r1 and beyond: its range, and that range's σ.
+  const auto extension = [&](double t, double& sigma) {
+    sigma = std::sqrt(var_p * (1.0 / n + (t + k_mean) * (t + k_mean) / s_kk));
+    const double inv = at_mean - slope * (t + k_mean);
+    return inv > 0 ? 1 / inv : std::numeric_limits<double>::infinity();
+  };
+  double sigma_b = 0, sigma_1 = 0;
+  const double at_beyond = extension(2, sigma_b), at_r1 = extension(1, sigma_1);
+  // The scanline beyond lies across the edge: past the near surface.
+  if (!(rangeAt(beyond, s1) > at_beyond + 3 * sigma_b)) return false;
+  return !(s1.rho < at_r1 - 3 * sigma_1);  // s1.rho: the line's range on scanline r1
+}
+
 bool LocusMapper::clearAbove(const Line& l, double s_top, int r1, const Sample& s1) const {
   if (!(s1.s <= s_top)) return false;
   const Eigen::Vector3d top = l.a + s_top * l.b;
@@ -615,6 +655,10 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   const bool across_cols = (e & 5u) && (e & 10u) && jump_cols > jump_rows;
   if (across_rows && meetsSurfaceInGap(r1, r2, s1, s2)) {
     hit.state = CellState::Unseen;  // maybe on a surface past its last sample
+    return;
+  }
+  if (!across_rows && !across_cols && row1_edge && !row2_edge && pastNearSurfaceEnd(r1, r2, s1, s2)) {
+    hit.state = CellState::Unseen;  // maybe past the lip, which its last sample may misplace
     return;
   }
   if (across_rows || across_cols) {
