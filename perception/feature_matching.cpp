@@ -161,7 +161,32 @@ FeatureMatch matchFeatures(const std::vector<Feature>& features1, const std::vec
     return true;
   };
 
-  const double cos_max = std::cos(config.max_rotation_deg * kPi / 180);
+  // The prior bounds the true pose, but a hypothesis is a fit to a few noisy feature pairs and
+  // differs from the truth by its own error: held to the prior exactly, a true pairing whose truth
+  // lies at the bound (the paper's 30° case with a 30° prior) is rejected whenever its fit errs
+  // outwards, about half the time. So the refitted hypothesis may turn past the prior by three σ
+  // of its rotation, σ_θ = σ_p / √(Σ ρ_k²), from its inliers' residuals (σ_p² = Σ d_k² / (3n − 6),
+  // d the distance of eq. 3 at the fit) and their spread ρ_k about their centroid
+  // (docs/matching.md).
+  const double max_rotation = config.max_rotation_deg * kPi / 180;
+  const auto rotationSigma = [&](const Eigen::Isometry3d& T, const std::vector<std::pair<int, int>>& pairs) {
+    const int n = int(pairs.size());
+    if (3 * n <= 6) return 0.0;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (const auto& [i, j] : pairs) centroid += T * features1[i].position;
+    centroid /= n;
+    double sum_d2 = 0, spread = 0;
+    for (const auto& [i, j] : pairs) {
+      const double d = featureDistance(transformed(features1[i], T), features2[j]);
+      sum_d2 += d * d;
+      spread += (T * features1[i].position - centroid).squaredNorm();
+    }
+    return spread > 0 ? std::sqrt(sum_d2 / (3 * n - 6) / spread) : 0.0;
+  };
+  const auto turnedFromT0 = [&](const Eigen::Isometry3d& T) {
+    return std::acos(std::clamp(((T0.linear().transpose() * T.linear()).trace() - 1) / 2, -1.0, 1.0));
+  };
+
   std::vector<std::pair<int, int>> pairing;
   std::vector<char> used(features2.size(), 0);
   // Verify a full hypothesis: fit, refit on its inliers, score by D.
@@ -173,7 +198,6 @@ FeatureMatch matchFeatures(const std::vector<Feature>& features1, const std::vec
     std::vector<std::pair<int, int>> inliers;
     double D = 0;
     for (int k = 0;; ++k) {
-      if ((T0.linear().transpose() * T.linear()).trace() < 1 + 2 * cos_max) return;  // turned beyond the prior
       D = featureDistanceSum(features1, features2, map2, T, config, &inliers);
       if (k == config.refits || inliers.size() < std::size_t(config.pairs_per_hypothesis)) break;
       const auto refit = fitPairing(features1, features2, inliers, T, true);
@@ -182,11 +206,14 @@ FeatureMatch matchFeatures(const std::vector<Feature>& features1, const std::vec
       if (!(D_refit < D)) break;
       T = *refit;
     }
+    const double sigma = rotationSigma(T, inliers);
+    if (turnedFromT0(T) > max_rotation + 3 * sigma) return;  // turned beyond the prior
     if (D < best.D) {
       best.found = true;
       best.D = D;
       best.nu = vectorFromPose(T);
       best.pairs = inliers;
+      best.rotation_sigma_deg = sigma * 180 / kPi;
     }
   };
   // Depth-first over pairings: level l pairs map 1's feature order[l] with a candidate or skips it.

@@ -14,7 +14,8 @@ namespace ambler::perception {
 
 struct FeatureMatchConfig {
   // The rover's prior: how far the truth may be from T_0 (the scenario's initial_error bounds). A
-  // transform turned further than max_rotation_deg from T_0 is not a candidate; a feature of map 1
+  // transform turned further than max_rotation_deg from T_0, plus three σ of its fit's rotation
+  // (a fit errs, and the truth may lie at the bound), is not a candidate; a feature of map 1
   // pairs only with features of map 2 within max_shift_m of where T_0 puts it.
   double max_rotation_deg = 30.0;
   double max_shift_m = 10.0;
@@ -49,6 +50,9 @@ struct FeatureMatch {
   long nodes = 0;                         // search-tree nodes visited
   long hypotheses = 0;                    // candidate transforms verified
   bool exhausted = false;                 // the search stopped at max_nodes
+  // σ of T_F's rotation from its inliers' residuals (the prior admits T_F turned up to
+  // max_rotation_deg + 3·rotation_sigma_deg from T_0: docs/matching.md); 0 when not found.
+  double rotation_sigma_deg = 0;
 };
 
 // The distance d of eq. 3 between feature a and feature b (same frame, same type): points and

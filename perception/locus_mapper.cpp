@@ -591,6 +591,40 @@ bool LocusMapper::pastNearSurfaceEnd(int r1, int r2, const Sample& s1, const Sam
   return !(s1.rho < at_r1 - 3 * sigma_1);  // s1.rho: the line's range on scanline r1
 }
 
+// The mirror image of pastNearSurfaceEnd on the far side of an occluding edge: scanline r2 (the
+// line behind it) is the far surface's first sample after the edge (the scanline beyond it, across
+// the edge, is an edge pixel in front of the far surface continued), and the line is in front of
+// r1. That first sample may be mixed with the edge's near side below linkedMixedPixel's
+// threshold, and then lies in front of the far surface, over the end of the shadow. So the line
+// is taken to meet the far surface inside the bracket only where it is behind the far surface
+// fitted to r1 and up to three clean scanlines past it and carried to r2, by more than three σ of
+// that extension; otherwise it may pass in front of the far surface into the shadow: unseen.
+bool LocusMapper::pastFarSurfaceStart(int r1, int r2, const Sample& s1, const Sample& s2) const {
+  if (!edges_) return false;
+  const int d = r2 - r1, beyond = r2 + d;
+  if (beyond < 0 || beyond >= rows_ || !edgeAt(beyond, s2)) return false;
+  double sk = 0, sy = 0, skk = 0, sky = 0;
+  int n = 0;
+  for (int k = 0; k < 4; ++k) {
+    const double y = rangeAt(r1 - k * d, s1);
+    if (!std::isfinite(y)) break;
+    sk += k, sy += 1 / y, skk += k * k, sky += k / y, ++n;
+  }
+  if (n < 2) return false;
+  const double k_mean = sk / n, s_kk = skk - sk * k_mean;
+  const double slope = (sky - sk * sy / n) / s_kk, at_mean = sy / n;
+  const double var_p = config_.sensor.rangeVariance(1 / at_mean);
+  const auto extension = [&](double t, double& sigma) {
+    sigma = std::sqrt(var_p * (1.0 / n + (t + k_mean) * (t + k_mean) / s_kk));
+    const double inv = at_mean - slope * (t + k_mean);
+    return inv > 0 ? 1 / inv : std::numeric_limits<double>::infinity();
+  };
+  double sigma_b = 0, sigma_2 = 0;
+  const double at_beyond = extension(2, sigma_b), at_r2 = extension(1, sigma_2);
+  if (!(rangeAt(beyond, s2) < at_beyond - 3 * sigma_b)) return false;
+  return !(s2.rho > at_r2 + 3 * sigma_2);
+}
+
 bool LocusMapper::clearAbove(const Line& l, double s_top, int r1, const Sample& s1) const {
   if (!(s1.s <= s_top)) return false;
   const Eigen::Vector3d top = l.a + s_top * l.b;
@@ -655,6 +689,10 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   const bool across_cols = (e & 5u) && (e & 10u) && jump_cols > jump_rows;
   if (across_rows && meetsSurfaceInGap(r1, r2, s1, s2)) {
     hit.state = CellState::Unseen;  // maybe on a surface past its last sample
+    return;
+  }
+  if (!across_rows && !across_cols && !row1_edge && row2_edge && pastFarSurfaceStart(r1, r2, s1, s2)) {
+    hit.state = CellState::Unseen;  // maybe in front of the far surface, over the shadow's end
     return;
   }
   if (!across_rows && !across_cols && row1_edge && !row2_edge && pastNearSurfaceEnd(r1, r2, s1, s2)) {

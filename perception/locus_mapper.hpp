@@ -205,6 +205,9 @@ class LocusMapper {
   // in front of the near surface carried from r2 and its clean successors to r1 by less than
   // three σ of that extension (docs/locus.md).
   bool pastNearSurfaceEnd(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
+  // The same on the far side: the line, behind scanline r2 (the far surface's first sample after an
+  // occluding edge, which may be mixed) and in front of r1, may be in front of the far surface.
+  bool pastFarSurfaceStart(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
   // Whether the line above the scanline bracket (r1, r1 + 1) that a hint found is provably in
   // front of everything the sensor saw, so that the walk down the line from its top would find
   // the same bracket first (docs/locus.md, "The highest crossing"): every pixel on the top side

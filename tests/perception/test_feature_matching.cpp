@@ -66,8 +66,8 @@ Eigen::Isometry3d paperCase() {
 // Map 2's features: map 1's moved by T, with map 1's features 3, 7 and 12 not seen (dropped) and
 // four spurious points, each position perturbed by N(0, σ²) per axis.
 std::vector<Feature> secondView(const std::vector<Feature>& f1, const Eigen::Isometry3d& T, double sigma,
-                                std::vector<std::pair<int, int>>* truth) {
-  std::mt19937 rng(99);
+                                std::vector<std::pair<int, int>>* truth, std::uint32_t seed = 99) {
+  std::mt19937 rng(seed);
   std::normal_distribution<double> n(0, sigma);
   std::uniform_real_distribution<double> xy(-6, 6), s(1, 3);
   std::vector<Feature> f2;
@@ -131,14 +131,40 @@ TEST(FeatureMatching, NoisyPositionsGiveTheFitsAccuracy) {
   EXPECT_EQ(m.pairs, truth);
 }
 
+// A prior of 20° when the truth is 30° from T_0: the truth is not returned, and what is returned
+// is turned from T_0 by at most the prior plus three σ of its own fit's rotation.
 TEST(FeatureMatching, HonoursThePriorsRotationBound) {
   const std::vector<Feature> f1 = scene(7);
   const std::vector<Feature> f2 = secondView(f1, paperCase(), 0.0, nullptr);
   FeatureMatchConfig c;
   c.max_rotation_deg = 20;  // the truth is 30° from T_0
   const FeatureMatch m = matchFeatures(f1, f2, knownMap(), PoseVector::Zero(), c);
-  if (m.found) EXPECT_LE(poseError(Eigen::Isometry3d::Identity(), poseFromVector(m.nu)).rotation_deg, 20 + 1e-9);
+  if (m.found)
+    EXPECT_LE(poseError(Eigen::Isometry3d::Identity(), poseFromVector(m.nu)).rotation_deg,
+              20 + 3 * m.rotation_sigma_deg + 1e-9);
   EXPECT_GT(poseError(paperCase(), poseFromVector(m.nu)).rotation_deg, 5.0);
+}
+
+// The truth exactly at the prior's bound (30° from T_0, a 30° prior: the paper's case as the
+// scenarios pose it), features with 3 cm of noise: a fit of the true pairing errs by its σ (about
+// 0.14°, NoisyPositionsGiveTheFitsAccuracy) and so lies past the bound about half the time. Held to
+// the bound exactly, the search then lost the truth; with the fit's 3σ allowed it keeps it on
+// every draw of the noise.
+TEST(FeatureMatching, TheTruthAtThePriorsBoundIsKept) {
+  const std::vector<Feature> f1 = scene(7);
+  int past_bound = 0;
+  for (std::uint32_t seed = 1; seed <= 20; ++seed) {
+    std::vector<std::pair<int, int>> truth;
+    const std::vector<Feature> f2 = secondView(f1, paperCase(), 0.03, &truth, seed);
+    const FeatureMatch m = matchFeatures(f1, f2, knownMap(), PoseVector::Zero());
+    ASSERT_TRUE(m.found) << "noise seed " << seed;
+    EXPECT_EQ(m.pairs, truth) << "noise seed " << seed;
+    const double turned = poseError(Eigen::Isometry3d::Identity(), poseFromVector(m.nu)).rotation_deg;
+    if (turned > 30) ++past_bound;
+    EXPECT_LE(turned, 30 + 3 * m.rotation_sigma_deg) << "noise seed " << seed;
+  }
+  std::printf("fits past the 30° bound: %d of 20\n", past_bound);
+  EXPECT_GT(past_bound, 0);  // the case the margin exists for did occur
 }
 
 TEST(FeatureMatching, NothingToMatchLeavesTheInitialEstimate) {
