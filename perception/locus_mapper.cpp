@@ -552,25 +552,29 @@ bool LocusMapper::linkedMixedPixel(int r1, int r2, const Sample& s1, const Sampl
   return departure > 3 * std::sqrt(6 * config_.sensor.rangeVariance(i_m));
 }
 
-// A bracket with edge pixels on its far side only, next to an occluding edge: its scanline r1 is
-// the near surface's last sample before the edge (the scanline beyond it, across the edge, is an
-// edge pixel past the near surface), and the line is in front of it. That sample's range cannot
-// be trusted to be the near surface's: a mixed pixel whose departure is below linkedMixedPixel's
-// threshold (3·√6·σ_p, up to 18 cm of range at 6 m with the ERIM's quantisation) passes as clean,
-// and it and its noise put the near surface's end past where it is, over the lip into the shadow.
-// So the line is taken to meet the near surface inside the bracket only where that is certain from
-// the clean samples alone: the near surface fitted to r2 and up to three scanlines past it (linear
-// in inverse range against row, as in meetsSurfaceInGap), carried to r1, with three standard
-// deviations of that extension's noise. Otherwise the line may pass the lip: the cell is unseen
-// (docs/locus.md, "Range shadows").
-bool LocusMapper::pastNearSurfaceEnd(int r1, int r2, const Sample& s1, const Sample& s2) const {
+// A bracket with edge pixels on one scanline only, next to an occluding edge: its edge-side
+// scanline m is the last sample of its surface before the edge (the scanline beyond m, across the
+// edge, is an edge pixel past the near surface or in front of the far one), and the other, o, is
+// clean. m's range cannot be trusted to be its surface's: a mixed pixel whose departure is below
+// linkedMixedPixel's threshold (3·√6·σ_p, up to 18 cm of range at 6 m with the ERIM's
+// quantisation) passes as clean, and it and its noise misplace the edge — on the near side
+// (m = r1, the line in front of it) past the lip, over the shadow; on the far side (m = r2, the
+// line behind it) in front of the far ground, over the shadow's end. So the line is taken to meet
+// m's surface inside the bracket only where that is certain from the clean samples alone: the
+// surface fitted to o and up to three scanlines past it (linear in inverse range against row, as
+// in meetsSurfaceInGap) and carried to m, with three standard deviations of that extension's
+// noise — the line in front of it there on the near side, behind it on the far side. Otherwise
+// the line may pass the edge: the cell is unseen (docs/locus.md, "Range shadows").
+bool LocusMapper::pastUntrustedEdgeSample(bool near_side, int r1, int r2, const Sample& s1, const Sample& s2) const {
   if (!edges_) return false;
-  const int d = r2 - r1, beyond = r1 - d;
-  if (beyond < 0 || beyond >= rows_ || !edgeAt(beyond, s1)) return false;
+  const int m = near_side ? r1 : r2, o = near_side ? r2 : r1, into = o - m, beyond = m - into;
+  const Sample& sm = near_side ? s1 : s2;
+  const Sample& so = near_side ? s2 : s1;
+  if (beyond < 0 || beyond >= rows_ || !edgeAt(beyond, sm)) return false;
   double sk = 0, sy = 0, skk = 0, sky = 0;
   int n = 0;
   for (int k = 0; k < 4; ++k) {
-    const double y = rangeAt(r2 + k * d, s2);
+    const double y = rangeAt(o + k * into, so);
     if (!std::isfinite(y)) break;
     sk += k, sy += 1 / y, skk += k * k, sky += k / y, ++n;
   }
@@ -578,51 +582,19 @@ bool LocusMapper::pastNearSurfaceEnd(int r1, int r2, const Sample& s1, const Sam
   const double k_mean = sk / n, s_kk = skk - sk * k_mean;
   const double slope = (sky - sk * sy / n) / s_kk, at_mean = sy / n;
   const double var_p = config_.sensor.rangeVariance(1 / at_mean);
-  // The near surface carried t scanlines from r2 towards r1 and beyond: its range, and that range's σ.
+  // The surface carried t scanlines from o towards m and beyond: its range, and that range's σ.
   const auto extension = [&](double t, double& sigma) {
     sigma = std::sqrt(var_p * (1.0 / n + (t + k_mean) * (t + k_mean) / s_kk));
     const double inv = at_mean - slope * (t + k_mean);
     return inv > 0 ? 1 / inv : std::numeric_limits<double>::infinity();
   };
-  double sigma_b = 0, sigma_1 = 0;
-  const double at_beyond = extension(2, sigma_b), at_r1 = extension(1, sigma_1);
-  // The scanline beyond lies across the edge: past the near surface.
-  if (!(rangeAt(beyond, s1) > at_beyond + 3 * sigma_b)) return false;
-  return !(s1.rho < at_r1 - 3 * sigma_1);  // s1.rho: the line's range on scanline r1
-}
-
-// The mirror image of pastNearSurfaceEnd on the far side of an occluding edge: scanline r2 (the
-// line behind it) is the far surface's first sample after the edge (the scanline beyond it, across
-// the edge, is an edge pixel in front of the far surface continued), and the line is in front of
-// r1. That first sample may be mixed with the edge's near side below linkedMixedPixel's
-// threshold, and then lies in front of the far surface, over the end of the shadow. So the line
-// is taken to meet the far surface inside the bracket only where it is behind the far surface
-// fitted to r1 and up to three clean scanlines past it and carried to r2, by more than three σ of
-// that extension; otherwise it may pass in front of the far surface into the shadow: unseen.
-bool LocusMapper::pastFarSurfaceStart(int r1, int r2, const Sample& s1, const Sample& s2) const {
-  if (!edges_) return false;
-  const int d = r2 - r1, beyond = r2 + d;
-  if (beyond < 0 || beyond >= rows_ || !edgeAt(beyond, s2)) return false;
-  double sk = 0, sy = 0, skk = 0, sky = 0;
-  int n = 0;
-  for (int k = 0; k < 4; ++k) {
-    const double y = rangeAt(r1 - k * d, s1);
-    if (!std::isfinite(y)) break;
-    sk += k, sy += 1 / y, skk += k * k, sky += k / y, ++n;
-  }
-  if (n < 2) return false;
-  const double k_mean = sk / n, s_kk = skk - sk * k_mean;
-  const double slope = (sky - sk * sy / n) / s_kk, at_mean = sy / n;
-  const double var_p = config_.sensor.rangeVariance(1 / at_mean);
-  const auto extension = [&](double t, double& sigma) {
-    sigma = std::sqrt(var_p * (1.0 / n + (t + k_mean) * (t + k_mean) / s_kk));
-    const double inv = at_mean - slope * (t + k_mean);
-    return inv > 0 ? 1 / inv : std::numeric_limits<double>::infinity();
-  };
-  double sigma_b = 0, sigma_2 = 0;
-  const double at_beyond = extension(2, sigma_b), at_r2 = extension(1, sigma_2);
-  if (!(rangeAt(beyond, s2) < at_beyond - 3 * sigma_b)) return false;
-  return !(s2.rho > at_r2 + 3 * sigma_2);
+  double sigma_b = 0, sigma_m = 0;
+  const double at_beyond = extension(2, sigma_b), at_m = extension(1, sigma_m);
+  const double range_beyond = rangeAt(beyond, sm);
+  // The scanline beyond lies across the edge: past the near surface, in front of the far one.
+  if (near_side ? !(range_beyond > at_beyond + 3 * sigma_b) : !(range_beyond < at_beyond - 3 * sigma_b)) return false;
+  // sm.rho: the line's range on scanline m.
+  return near_side ? !(sm.rho < at_m - 3 * sigma_m) : !(sm.rho > at_m + 3 * sigma_m);
 }
 
 bool LocusMapper::clearAbove(const Line& l, double s_top, int r1, const Sample& s1) const {
@@ -691,12 +663,8 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
     hit.state = CellState::Unseen;  // maybe on a surface past its last sample
     return;
   }
-  if (!across_rows && !across_cols && !row1_edge && row2_edge && pastFarSurfaceStart(r1, r2, s1, s2)) {
-    hit.state = CellState::Unseen;  // maybe in front of the far surface, over the shadow's end
-    return;
-  }
-  if (!across_rows && !across_cols && row1_edge && !row2_edge && pastNearSurfaceEnd(r1, r2, s1, s2)) {
-    hit.state = CellState::Unseen;  // maybe past the lip, which its last sample may misplace
+  if (!across_rows && !across_cols && row1_edge != row2_edge && pastUntrustedEdgeSample(row1_edge, r1, r2, s1, s2)) {
+    hit.state = CellState::Unseen;  // maybe past the edge, which its last sample may misplace
     return;
   }
   if (across_rows || across_cols) {

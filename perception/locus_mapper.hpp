@@ -200,14 +200,11 @@ class LocusMapper {
   // Whether the one of the scanlines r1, r2 that has edge pixels is a mixed pixel the edge
   // detector took for part of the other surface (docs/locus.md).
   bool linkedMixedPixel(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
-  // Whether the line, in front of scanline r1 (the near surface's last sample before an occluding
-  // edge, which may be mixed below the detector's threshold) and behind r2, may be past the edge:
-  // in front of the near surface carried from r2 and its clean successors to r1 by less than
-  // three σ of that extension (docs/locus.md).
-  bool pastNearSurfaceEnd(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
-  // The same on the far side: the line, behind scanline r2 (the far surface's first sample after an
-  // occluding edge, which may be mixed) and in front of r1, may be in front of the far surface.
-  bool pastFarSurfaceStart(int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
+  // Whether the line, crossing the bracket (r1, r2) next to an occluding edge, may be past the
+  // edge, which the bracket's edge-side sample (r1 on the near side, r2 on the far side; it may be
+  // mixed below the detector's threshold) misplaces: judged from the clean samples' surface
+  // carried to that scanline, with three σ of that extension (docs/locus.md).
+  bool pastUntrustedEdgeSample(bool near_side, int r1, int r2, const LocusSample& s1, const LocusSample& s2) const;
   // Whether the line above the scanline bracket (r1, r1 + 1) that a hint found is provably in
   // front of everything the sensor saw, so that the walk down the line from its top would find
   // the same bracket first (docs/locus.md, "The highest crossing"): every pixel on the top side
