@@ -156,6 +156,7 @@ void run(RunState& s) {
         nlohmann::ordered_json pairs = nlohmann::ordered_json::array();
         for (const auto& [a, b] : fm.pairs) pairs.push_back({a, b});
         f["pairs"] = pairs;
+        f["rotation_sigma_deg"] = fm.rotation_sigma_deg;
         f["nodes"] = fm.nodes;
         f["hypotheses"] = fm.hypotheses;
         f["exhausted"] = fm.exhausted;
