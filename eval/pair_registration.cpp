@@ -13,6 +13,10 @@ PairRegistration::PairRegistration(const perception::ScanMap& view_i, const Eige
                                    const perception::ScanMap& view_j, const Eigen::Isometry3d& T_WS_j,
                                    perception::RegistrationConfig config, const std::vector<MatchMethod>& methods)
     : i_(view_i), j_(view_j), T_WS_i_(T_WS_i), T_IJ_(T_WS_i.inverse() * T_WS_j), config_(std::move(config)) {
+  // Map I as registration maps it (config.locus: the samples at edges trusted, as for map J), on
+  // the grid of the run's map I.
+  map_i_ = perception::LocusMapper(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus, i_.map.grid().T_WM)
+               .map(i_.map.grid());
   // The mapper map I was made with: the pixels of image I that map I's lines share.
   if (std::find(methods.begin(), methods.end(), MatchMethod::IconicWeighted) != methods.end())
     source_i_.emplace(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus);
@@ -56,9 +60,9 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
   // Image J as the rover has it: unwrapped, its edges, at the believed pose.
   perception::RangeImage image = j_.image;
   image.T_WS = out.believed_WS;
-  const perception::MapGrid grid_j = perception::believedGrid(i_.map.grid(), T_WS_i_, out.believed_WS);
+  const perception::MapGrid grid_j = perception::believedGrid(map_i_.grid(), T_WS_i_, out.believed_WS);
   Stopwatch t;
-  out.reg = perception::registerViews(i_.map, image, j_.edges ? &*j_.edges : nullptr, grid_j, *paper, config_,
+  out.reg = perception::registerViews(map_i_, image, j_.edges ? &*j_.edges : nullptr, grid_j, *paper, config_,
                                       source_i_ ? &*source_i_ : nullptr);
   out.seconds = t.seconds();
   out.T_est = T_WS_i_.inverse() * perception::poseFromVector(out.reg.nu).inverse() * out.believed_WS;

@@ -51,6 +51,7 @@ class PairRegistration {
   const perception::ScanMap& j_;
   Eigen::Isometry3d T_WS_i_, T_IJ_;
   perception::RegistrationConfig config_;
+  perception::ElevationMap map_i_;                   // map I as registration maps it (config.locus)
   std::optional<perception::LocusMapper> source_i_;  // for iconic_weighted's covariance
   std::vector<Eigen::Vector3d> returns_i_;           // the peers' target: scan I's returns in the world
 };

@@ -559,6 +559,7 @@ perception::LocusConfig locusConfig(const Scenario& sc) {
 perception::RegistrationConfig registrationConfig(const Scenario& sc) {
   perception::RegistrationConfig c;
   c.locus = locusConfig(sc);
+  c.locus.trust_edge_samples = true;  // maps to match, not to stand on (perception::LocusConfig)
   c.prior_translation_m = std::sqrt(3.0) * kMaxInitialTranslationM;
   c.prior_rotation_deg = kMaxInitialRotationDeg;
   return c;

@@ -566,7 +566,7 @@ bool LocusMapper::linkedMixedPixel(int r1, int r2, const Sample& s1, const Sampl
 // noise — the line in front of it there on the near side, behind it on the far side. Otherwise
 // the line may pass the edge: the cell is unseen (docs/locus.md, "Range shadows").
 bool LocusMapper::pastUntrustedEdgeSample(bool near_side, int r1, int r2, const Sample& s1, const Sample& s2) const {
-  if (!edges_) return false;
+  if (!edges_ || config_.trust_edge_samples) return false;
   const int m = near_side ? r1 : r2, o = near_side ? r2 : r1, into = o - m, beyond = m - into;
   const Sample& sm = near_side ? s1 : s2;
   const Sample& so = near_side ? s2 : s1;

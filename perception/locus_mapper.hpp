@@ -30,6 +30,13 @@ struct LocusConfig {
   // the noise of its curvature fits, and this error is a smooth bias that every view of a cell
   // shares, which only the composite must not average away (docs/composite.md); the merge turns it on.
   bool footprint_sigma = false;
+  // Trust the sample next to an occluding edge to place the edge (docs/locus.md, "The samples
+  // either side of an edge"). Off for the maps a run writes and scores: a cell that may lie over a
+  // shadow is unseen, not known, as a footfall planner needs. On for the maps registration
+  // matches: a matcher wants every surface sample, and a mixed sample's few centimetres at a rim
+  // are within what its robust costs absorb, while the rim cells it would lose carry the convex
+  // features feature matching pairs (docs/matching.md).
+  bool trust_edge_samples = false;
   bool vectorized = true;  // maps: the common case in SIMD lanes (8 AVX-512 or 2 × 4 AVX2) where
                            // the CPU has them (the same bits as the scalar search; false: scalar)
 };

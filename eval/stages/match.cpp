@@ -14,6 +14,7 @@
 #include "eval/match_figures.hpp"
 #include "eval/pair_registration.hpp"
 #include "eval/stages.hpp"
+#include "perception/locus_mapper.hpp"
 #include "perception/registration.hpp"
 #include "perception/rigid_transform.hpp"
 #include "perception/sensor_geometry.hpp"
@@ -61,8 +62,14 @@ struct Registered {
 
 // matching/view_K_features.png: each view's map with its features.
 void featurePictures(const RunState& s) {
+  // The features registration extracts: from each view's map as registration maps it
+  // (registrationConfig: the samples at edges trusted), which the run's map may not be.
+  const perception::LocusConfig locus = registrationConfig(s.scenario).locus;
   for (int k = 0; k < int(s.views.size()); ++k) {
-    const perception::ElevationMap& map = s.views[k].locus->map;
+    const perception::ScanMap& view = *s.views[k].locus;
+    const perception::MapGrid& grid = view.map.grid();
+    const perception::ElevationMap map =
+        perception::LocusMapper(view.image, view.edges ? &*view.edges : nullptr, locus, grid.T_WM).map(grid);
     writeFeaturesPicture(s.out / "matching", k, map, perception::extractFeatures(map),
                          s.scenario.name + ": " + viewName(k) + " locus map");
   }
