@@ -153,6 +153,51 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
   EXPECT_EQ(checked_erim, 24);
 }
 
+// The rule above is the run's; the maps registration matches trust the samples at edges
+// (LocusConfig::trust_edge_samples, docs/matching.md). On a drop-off seen with the ERIM, the
+// trusting map differs from the run's only where the run's is unseen: every cell the run's map
+// knows, the trusting map knows with the same bits, and the cells only the trusting map knows
+// include hidden ones known beyond 3σ_z (what the rule exists to prevent).
+TEST(MapEdges, RegistrationMapsTrustTheSamplesAtEdges) {
+  const auto scene = dropScene(0.6);
+  ViewSpec view;
+  view.xyz_m = {4, 0, 4.6};
+  view.rpy_rad = {0, -std::atan(4.0 / 5.0), 90.0 * kDeg};
+  MapSpec map;
+  map.x_m = {-8, 4};
+  map.y_m = {-5, 5};
+  const perception::SensorModel sensor;
+  const Mapped m = mapView(*scene, sensor, view, map, 11);
+  perception::ScanToMapConfig trusting = map.scanToMapConfig();
+  trusting.locus.trust_edge_samples = true;
+  const Eigen::Isometry3d T_WS = perception::sensorPose(view.xyz_m, view.rpy_rad);
+  const sim::Scan scan = sim::ErimScanner(*scene->scene, sensor).scan(T_WS, 11);
+  const perception::ElevationMap t = perception::scanToMap(scan.image, sensor, T_WS, m.grid, trusting).map;
+  const auto known = std::uint8_t(perception::CellState::Known);
+  long only_trusting = 0, hidden_beyond = 0;
+  for (int r = 0; r < m.grid.rows; ++r)
+    for (int c = 0; c < m.grid.cols; ++c) {
+      const auto run_state = m.build.map.state()(r, c), trust_state = t.state()(r, c);
+      if (run_state == known) {
+        ASSERT_EQ(trust_state, known) << r << ", " << c;
+        ASSERT_EQ(t.elevation()(r, c), m.build.map.elevation()(r, c)) << r << ", " << c;
+        continue;
+      }
+      if (trust_state != run_state) {
+        ASSERT_EQ(run_state, std::uint8_t(perception::CellState::Unseen)) << r << ", " << c;
+        ++only_trusting;
+        if (m.vis(r, c) == std::uint8_t(sim::Visibility::Hidden) &&
+            std::abs(t.elevation()(r, c) - m.z(r, c)) > 3 * t.sigma()(r, c))
+          ++hidden_beyond;
+      }
+    }
+  std::printf("cells only the trusting map knows: %ld, of them hidden and beyond 3 sigma: %ld\n", only_trusting,
+              hidden_beyond);
+  EXPECT_GT(only_trusting, 0);
+  EXPECT_GT(hidden_beyond, 0);
+  EXPECT_EQ(m.metrics.known_in_shadow_above_3sigma, 0);
+}
+
 // Behind rocks the shadow ceiling is honest too: on Mars-like terrain (k = 0.15 rocks, craters;
 // the scenario mars.yaml) scanned with the ERIM's noise and quantisation, a shadow cell's
 // ceiling is above the true surface (the ceiling is taken under a ray that went past the line
