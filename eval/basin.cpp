@@ -122,7 +122,6 @@ struct Tally {
   std::vector<std::vector<double>> ok_err;            // [method] translation errors of the successes
 };
 
-// The middle value of a non-empty list, or the mean of the two middle values.
 // For each rotation, the largest translation up to which every cell reaches `level` (NaN: not
 // even the first); what basin_boundary.png draws.
 std::vector<double> boundary(const BasinGrid& g, const std::vector<double>& rate, double level) {

@@ -26,7 +26,6 @@ constexpr const char* kRpyAxis = "matching.initial_error.rpy_deg";
 
 std::string reg(std::size_t k, const char* key) { return "registration." + std::to_string(k) + "." + key; }
 
-// The middle value, or the mean of the two middle values; NaN for none.
 double maximum(const std::vector<double>& v) { return v.empty() ? kNaN : *std::max_element(v.begin(), v.end()); }
 
 // An iteration count: "22", a median between two "22.5".

@@ -13,10 +13,11 @@ PairRegistration::PairRegistration(const perception::ScanMap& view_i, const Eige
                                    const perception::ScanMap& view_j, const Eigen::Isometry3d& T_WS_j,
                                    perception::RegistrationConfig config, const std::vector<MatchMethod>& methods)
     : i_(view_i), j_(view_j), T_WS_i_(T_WS_i), T_IJ_(T_WS_i.inverse() * T_WS_j), config_(std::move(config)) {
-  // Map I as registration maps it (config.locus: the samples at edges trusted, as for map J), on
-  // the grid of the run's map I.
-  map_i_ = perception::LocusMapper(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus, i_.map.grid().T_WM)
-               .map(i_.map.grid());
+  // Map I as registration maps it for the paper's methods (config.locus: the samples at edges
+  // trusted, as for map J), on the grid of the run's map I.
+  if (std::any_of(methods.begin(), methods.end(), [](MatchMethod m) { return paperMethod(m).has_value(); }))
+    map_i_ = perception::LocusMapper(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus, i_.map.grid().T_WM)
+                 .map(i_.map.grid());
   // The mapper map I was made with: the pixels of image I that map I's lines share.
   if (std::find(methods.begin(), methods.end(), MatchMethod::IconicWeighted) != methods.end())
     source_i_.emplace(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus);

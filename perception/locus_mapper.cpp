@@ -480,6 +480,22 @@ bool LocusMapper::edgeAt(int r, const Sample& s) const {
   return ((*edges_)(r, s.c0) && s.fc != 1.0) || ((*edges_)(r, s.c0 + 1) && s.fc != 0.0);
 }
 
+LocusMapper::InverseRangeFit LocusMapper::fitInverseRange(double y0, int first, int step, const Sample& s) const {
+  double sk = 0, sy = 0, skk = 0, sky = 0;
+  int n = 0;
+  for (int k = 0; k < 4; ++k) {
+    const double y = k == 0 ? y0 : rangeAt(first + k * step, s);
+    if (!std::isfinite(y)) break;
+    sk += k, sy += 1 / y, skk += k * k, sky += k / y, ++n;
+  }
+  InverseRangeFit fit;
+  fit.n = n;
+  if (n == 0) return fit;
+  fit.k_mean = sk / n, fit.s_kk = skk - sk * fit.k_mean;
+  fit.slope = (sky - sk * sy / n) / fit.s_kk, fit.at_mean = sy / n;
+  return fit;
+}
+
 bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Sample& s2) const {
   const int d = r2 - r1;  // from the far side to the near side
   // The line's range at (fractional) row r, linear between its samples at r1 and r2.
@@ -497,24 +513,15 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   // line in inverse range against row (least squares: the fit's error grows slower with the
   // distance it is carried than two samples' does).
   const int n0 = near_mixed ? r2 + d : r2;
-  double sk = 0, sy = 0, skk = 0, sky = 0;
-  int n = 0;
-  for (int k = 0; k < 4; ++k) {
-    const double y = k == 0 ? (near_mixed ? near1 : near0) : rangeAt(n0 + k * d, s2);
-    if (!std::isfinite(y)) break;
-    sk += k, sy += 1 / y, skk += k * k, sky += k / y, ++n;
-  }
+  const InverseRangeFit fit = fitInverseRange(near_mixed ? near1 : near0, n0, d, s2);
   // (With a single sample the near surface's course past it is unknown, so is the edge's place.)
-  if (n < 2) return true;
-  const double k_mean = sk / n, s_kk = skk - sk * k_mean;
-  const double slope = (sky - sk * sy / n) / s_kk, at_mean = sy / n;
+  if (fit.n < 2) return true;
   const double t_near = mix ? 1.5 : 1.0;  // scanlines past n0 towards the far side
-  const double inv_near = at_mean + slope * (-t_near - k_mean);
+  const double inv_near = fit.inverseAt(t_near);
   // The extension's range errs by σ_ext = σ_p·√(1/n + (t + k̄)²/S_kk) (σ_p at the near surface's
   // range); the near surface gets one σ_ext more, so that noise rarely puts a visible lip top into
   // the shadow (each σ_ext more costs shadow recall: docs/locus.md has the trade's figures).
-  const double sigma_ext = std::sqrt(config_.sensor.rangeVariance(1 / (sy / n)) *
-                                     (1.0 / n + (t_near + k_mean) * (t_near + k_mean) / s_kk));
+  const double sigma_ext = fit.sigma(config_.sensor.rangeVariance(1 / fit.at_mean), t_near);
   if (!(inv_near > 0) || lineAt(n0 - t_near * d) < 1 / inv_near + sigma_ext) return true;
   // The far surface: last clean sample at f0, range a, the sample past it b.
   const int f0 = far_mixed ? r1 - d : r1;
@@ -571,25 +578,16 @@ bool LocusMapper::pastUntrustedEdgeSample(bool near_side, int r1, int r2, const 
   const Sample& sm = near_side ? s1 : s2;
   const Sample& so = near_side ? s2 : s1;
   if (beyond < 0 || beyond >= rows_ || !edgeAt(beyond, sm)) return false;
-  double sk = 0, sy = 0, skk = 0, sky = 0;
-  int n = 0;
-  for (int k = 0; k < 4; ++k) {
-    const double y = rangeAt(o + k * into, so);
-    if (!std::isfinite(y)) break;
-    sk += k, sy += 1 / y, skk += k * k, sky += k / y, ++n;
-  }
-  if (n < 2) return false;  // no course to carry: the bracket decides, as before
-  const double k_mean = sk / n, s_kk = skk - sk * k_mean;
-  const double slope = (sky - sk * sy / n) / s_kk, at_mean = sy / n;
-  const double var_p = config_.sensor.rangeVariance(1 / at_mean);
-  // The surface carried t scanlines from o towards m and beyond: its range, and that range's σ.
-  const auto extension = [&](double t, double& sigma) {
-    sigma = std::sqrt(var_p * (1.0 / n + (t + k_mean) * (t + k_mean) / s_kk));
-    const double inv = at_mean - slope * (t + k_mean);
+  const InverseRangeFit fit = fitInverseRange(rangeAt(o, so), o, into, so);
+  if (fit.n < 2) return false;  // no course to carry: the bracket decides, as before
+  const double var_p = config_.sensor.rangeVariance(1 / fit.at_mean);
+  // The surface carried t scanlines from o towards m and beyond, in range.
+  const auto extension = [&](double t) {
+    const double inv = fit.inverseAt(t);
     return inv > 0 ? 1 / inv : std::numeric_limits<double>::infinity();
   };
-  double sigma_b = 0, sigma_m = 0;
-  const double at_beyond = extension(2, sigma_b), at_m = extension(1, sigma_m);
+  const double at_beyond = extension(2), at_m = extension(1);
+  const double sigma_b = fit.sigma(var_p, 2), sigma_m = fit.sigma(var_p, 1);
   const double range_beyond = rangeAt(beyond, sm);
   // The scanline beyond lies across the edge: past the near surface, in front of the far one.
   if (near_side ? !(range_beyond > at_beyond + 3 * sigma_b) : !(range_beyond < at_beyond - 3 * sigma_b)) return false;
@@ -663,10 +661,6 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
     hit.state = CellState::Unseen;  // maybe on a surface past its last sample
     return;
   }
-  if (!across_rows && !across_cols && row1_edge != row2_edge && pastUntrustedEdgeSample(row1_edge, r1, r2, s1, s2)) {
-    hit.state = CellState::Unseen;  // maybe past the edge, which its last sample may misplace
-    return;
-  }
   if (across_rows || across_cols) {
     hit.state = CellState::Shadow;  // the locus meets the image at an occluding edge
     // The ceiling: under the lowest ray that went past the line beyond doubt — r1's, or, where
@@ -681,6 +675,10 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
       if (sc.valid && !(sc.delta < 0)) sc.valid = false;
     }
     if (sc.valid) hit.ceiling = u + sc.s * v;
+    return;
+  }
+  if (row1_edge != row2_edge && pastUntrustedEdgeSample(row1_edge, r1, r2, s1, s2)) {
+    hit.state = CellState::Unseen;  // maybe past the edge, which its last sample may misplace
     return;
   }
   hit.state = CellState::Known;

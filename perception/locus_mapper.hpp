@@ -196,6 +196,19 @@ class LocusMapper {
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;
   double sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
                         const Eigen::Vector3d& b) const;
+  // A surface's course across scanlines: inverse range fitted by least squares against k, its
+  // samples at scanlines first + k·step (k = 0…3, y0 the first's range, the rest read in sample s's
+  // columns), up to the first missing one. inverseAt(t): the fit carried t scanlines before the
+  // first sample; sigma(var_p, t): that value's σ in range for a per-sample range variance var_p.
+  struct InverseRangeFit {
+    int n = 0;
+    double k_mean = 0, s_kk = 0, slope = 0, at_mean = 0;
+    double inverseAt(double t) const { return at_mean - slope * (t + k_mean); }
+    double sigma(double var_p, double t) const {
+      return std::sqrt(var_p * (1.0 / n + (t + k_mean) * (t + k_mean) / s_kk));
+    }
+  };
+  InverseRangeFit fitInverseRange(double y0, int first, int step, const LocusSample& s) const;
   // At an occluding edge between the scanlines r1 (s1: the line in front of what it saw) and
   // r2 = r1 ± 1 (s2: behind the near surface): could the line be on either surface, extended
   // past its last sample into the gap (docs/locus.md)?
