@@ -466,10 +466,12 @@ double LocusMapper::hermiteRoot(double phi_a, double y0, double g0, double phi_b
 // plus its extension's noise — so that the visible top of a lip is kept out of the shadow; the
 // far one half a scanline, to the middle of the gap, where the edge's shadow ends on it on
 // average. A mixed pixel (its footprint straddled the edge: a range between the two surfaces,
-// footprints one scanline wide) says the edge is inside its footprint: then the near surface may
-// reach the footprint's far side, 1.5 scanlines past its last clean sample, and the far one is
-// extended to the mixed pixel's centre. A line that meets either extension is unseen (maybe on
-// that surface, visible but not sampled); every other line there is in the shadow.
+// footprints one scanline wide) says the edge is inside its footprint, at most 1.5 scanlines past
+// the near surface's last clean sample, and its range says where: the fraction of the footprint on
+// the near surface, read as a disk's, bounds how far the near surface reaches (with the emulator's
+// cubature error and the fraction's noise) and places the far surface's end. A line that meets
+// either extension is unseen (maybe on that surface, visible but not sampled); every other line
+// there is in the shadow.
 double LocusMapper::rangeAt(int r, const Sample& s) const {
   if (r < 0 || r >= rows_) return kNaN;
   return (1 - s.fc) * double(image_.range(r, s.c0)) + s.fc * double(image_.range(r, s.c0 + 1));
@@ -516,7 +518,31 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   const InverseRangeFit fit = fitInverseRange(near_mixed ? near1 : near0, n0, d, s2);
   // (With a single sample the near surface's course past it is unknown, so is the edge's place.)
   if (fit.n < 2) return true;
-  const double t_near = mix ? 1.5 : 1.0;  // scanlines past n0 towards the far side
+  // Scanlines past n0 towards the far side (the near surface) and past f0 towards the near side
+  // (the far surface); a mixed pixel lies one scanline past each.
+  double t_near = mix ? 1.5 : 1.0, t_far = mix ? 1.0 : 0.5;
+  const int f0 = far_mixed ? r1 - d : r1;
+  const double fa = far_mixed ? far1 : far0, fb = far_mixed ? far2 : far1;
+  if (mix && config_.sensor.mixed_pixels && std::isfinite(fb)) {
+    // Where in its footprint the mixed pixel puts the edge: the near fraction of its footprint
+    // from its range between the two surfaces carried to it, the footprint a disk one footprint
+    // radius (a scanlines) wide either side of its centre. The near surface reaches the far end
+    // of what that fraction allows, with the cubature's error and 2σ of the fraction's noise; the
+    // far one, to the edge's estimate.
+    const double inv_n = fit.inverseAt(1.0), inv_f = 2 / fa - 1 / fb;
+    if (inv_f > 0 && inv_n > inv_f) {
+      const double rho_m = near_mixed ? near0 : far0, rho_n = 1 / inv_n, rho_f = 1 / inv_f;
+      const double A = SensorModel::nearFraction(rho_m, rho_n, rho_f);
+      // dA/dρ_m ≈ −1/(ρ_f − ρ_n); the near extension's and the far extrapolation's (2·i_a − i_b:
+      // five times a sample's variance) errors enter alike.
+      const double sigma_n = fit.sigma(config_.sensor.rangeVariance(rho_n), 1.0);
+      const double sigma_A = std::sqrt(config_.sensor.rangeVariance(rho_m) + sigma_n * sigma_n +
+                                       5 * config_.sensor.rangeVariance(rho_f)) / (rho_f - rho_n);
+      const double radius = 0.5 * config_.sensor.beamDivergence() / dphi_;
+      t_near = 1 + radius * SensorModel::diskEdgeOffset(A + SensorModel::kCubatureFractionError + 2 * sigma_A);
+      t_far = 1 - radius * SensorModel::diskEdgeOffset(A);
+    }
+  }
   const double inv_near = fit.inverseAt(t_near);
   // The extension's range errs by σ_ext = σ_p·√(1/n + (t + k̄)²/S_kk) (σ_p at the near surface's
   // range); the near surface gets one σ_ext more, so that noise rarely puts a visible lip top into
@@ -524,12 +550,8 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   const double sigma_ext = fit.sigma(config_.sensor.rangeVariance(1 / fit.at_mean), t_near);
   if (!(inv_near > 0) || lineAt(n0 - t_near * d) < 1 / inv_near + sigma_ext) return true;
   // The far surface: last clean sample at f0, range a, the sample past it b.
-  const int f0 = far_mixed ? r1 - d : r1;
-  const double fa = far_mixed ? far1 : far0, fb = far_mixed ? far2 : far1;
-  if (std::isfinite(fb)) {
-    const double t = mix ? 1.0 : 0.5;  // scanlines past f0 towards the near side
-    if (lineAt(f0 + t * d) * (1 / fa + t * (1 / fa - 1 / fb)) >= 1) return true;  // behind it there
-  }
+  if (std::isfinite(fb) && lineAt(f0 + t_far * d) * (1 / fa + t_far * (1 / fa - 1 / fb)) >= 1)
+    return true;  // behind it there
   return false;
 }
 

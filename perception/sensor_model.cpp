@@ -1,10 +1,35 @@
 #include "perception/sensor_model.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <numbers>
 #include <stdexcept>
 #include <string>
 
 namespace ambler::perception {
+
+double SensorModel::mixedRange(double near_fraction, double rho_near, double rho_far) {
+  const double a = near_fraction, wn = a / rho_near, wf = (1 - a) / rho_far;
+  return (wn + wf) / (wn / rho_near + wf / rho_far);
+}
+
+double SensorModel::nearFraction(double rho_mixed, double rho_near, double rho_far) {
+  // ρ_m·(A·a² + (1 − A)·b²) = A·a + (1 − A)·b with a = 1/ρ_n, b = 1/ρ_f, solved for A.
+  const double a = 1 / rho_near, b = 1 / rho_far;
+  return b * (1 - rho_mixed * b) / ((a - b) * (rho_mixed * (a + b) - 1));
+}
+
+double SensorModel::diskEdgeOffset(double near_fraction) {
+  const double A = std::clamp(near_fraction, 0.0, 1.0);
+  // F is increasing on [−1, 1]: bisection to below 1e-12.
+  double lo = -1, hi = 1;
+  for (int i = 0; i < 42; ++i) {
+    const double s = 0.5 * (lo + hi);
+    const double F = 0.5 + (s * std::sqrt(1 - s * s) + std::asin(s)) / std::numbers::pi;
+    (F < A ? lo : hi) = s;
+  }
+  return 0.5 * (lo + hi);
+}
 
 void validate(const SensorModel& s) {
   const auto require = [](bool ok, const char* what) {

@@ -49,6 +49,22 @@ struct SensorModel {
   }
   double rangeSigma(double rho) const { return std::sqrt(rangeVariance(rho)); }
 
+  // A mixed pixel (docs/erim.md, "Footprint"): a fraction A of the footprint on a near surface at
+  // range ρ_n, the rest on a far one at ρ_f, reports the power-weighted mean (power ∝ 1/ρ²)
+  //   ρ_m = (A/ρ_n + (1 − A)/ρ_f) / (A/ρ_n² + (1 − A)/ρ_f²).
+  static double mixedRange(double near_fraction, double rho_near, double rho_far);
+  // Its inverse, the A that gives ρ_m (not clamped: noise may put it outside [0, 1]).
+  static double nearFraction(double rho_mixed, double rho_near, double rho_far);
+  // The footprint taken as a uniform disk: the offset s ∈ [−1, 1], in footprint radii from its
+  // centre towards the far side, of a straight edge that leaves the fraction A of the disk's area
+  // on the near side — the inverse of F(s) = 1/2 + (s·√(1 − s²) + asin s)/π (A clamped to [0, 1]).
+  static double diskEdgeOffset(double near_fraction);
+  // The emulator samples the disk by a 7-point cubature (centre 1/4, six on a ring 1/8 each), whose
+  // near fraction for a straight edge departs from the disk's F(s) by at most 1/4: an edge along
+  // the ring's diameter through two of its points switches the centre and those two together (A
+  // jumps from 1/4 to 3/4 where F passes 1/2). docs/locus.md, "Range shadows".
+  static constexpr double kCubatureFractionError = 0.25;
+
   // The footprint's full angle actually used (resolves the 0 default).
   double beamDivergence() const {
     if (beam_divergence_rad > 0) return beam_divergence_rad;

@@ -86,9 +86,11 @@ perception::SensorModel noiseFree() {
 // only the far side's share, ~w/8. With the ideal sensor: where w/S ≤ 0.1 both reach 0.9, and
 // everywhere the map is honest: no visible lip top in the shadow, every shadow ceiling above the
 // true surface, no truly hidden cell known with an error above 3σ_z. With the ERIM's noise,
-// quantisation and mixed pixels the figures are printed, and one is asserted: for drops of
-// 0.45–0.6 m, no hidden cell known beyond 3σ_z (docs/locus.md has the rest and what is left:
-// small drops whose edges the detector misses, mixed pixels whose central ray hit the lip).
+// quantisation and mixed pixels the figures are printed, and two are asserted: no visible lip top
+// in the shadow (a mixed pixel at the lip places the edge inside its footprint, and the near
+// surface is taken as far as that allows), and for drops of 0.45–0.6 m no hidden cell known beyond
+// 3σ_z (docs/locus.md has the rest and what is left: small drops whose edges the detector misses,
+// mixed pixels whose central ray hit the lip).
 TEST(MapEdges, DropOffSeenFromItsHighSide) {
   int checked_pr = 0, checked_erim = 0;
   for (const double drop : {0.2, 0.45, 0.6}) {
@@ -139,6 +141,11 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
                 EXPECT_GE(m.metrics.shadow_precision, 0.9) << what;
                 EXPECT_GE(m.metrics.shadow_recall, 0.9) << what;
               }
+            }
+            if (!ideal) {
+              // A mixed pixel at the lip bounds the near surface's reach by its near fraction
+              // (docs/locus.md): the bound keeps the visible top of the lip out of the shadow.
+              EXPECT_EQ(lip_in_shadow, 0) << what;
             }
             if (!ideal && drop >= 0.45) {
               // The samples either side of the edge may be mixed below the detector's threshold;

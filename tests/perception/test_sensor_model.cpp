@@ -1,5 +1,5 @@
-// The sensor model's σ_ρ against its definition, the footprint's default, and validate() refusing
-// each out-of-range field by name.
+// The sensor model's σ_ρ against its definition, the footprint's default, a mixed pixel's range
+// and its inverse, and validate() refusing each out-of-range field by name.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -65,6 +65,44 @@ std::string rejection(const SensorModel& s) {
     return e.what();
   }
   return "";
+}
+
+// A mixed pixel's range is the power-weighted mean of its two surfaces' (power ∝ 1/ρ²):
+// mixedRange against that mean written out, nearFraction its inverse, both ends exact.
+TEST(SensorModel, MixedRangeAndItsInverse) {
+  for (double rho_n : {2.0, 5.6, 12.0})
+    for (double jump : {0.05, 0.4, 3.0})
+      for (double A : {0.0, 0.125, 0.25, 0.5, 0.75, 0.875, 1.0}) {
+        const double rho_f = rho_n + jump;
+        const double power = A / (rho_n * rho_n) + (1 - A) / (rho_f * rho_f);
+        const double mean = (A / rho_n + (1 - A) / rho_f) / power;
+        const double rho_m = SensorModel::mixedRange(A, rho_n, rho_f);
+        EXPECT_NEAR(rho_m, mean, 1e-12 * rho_f);
+        EXPECT_GE(rho_m, rho_n - 1e-12);
+        EXPECT_LE(rho_m, rho_f + 1e-12);
+        // dA/dρ_m ≈ 1/jump: a relative error of 1e-12 in ρ_m moves A by about 1e-12·ρ/jump.
+        EXPECT_NEAR(SensorModel::nearFraction(rho_m, rho_n, rho_f), A, 1e-9 * rho_f / jump);
+      }
+  EXPECT_DOUBLE_EQ(SensorModel::nearFraction(5.0, 5.0, 6.0), 1.0);
+  EXPECT_DOUBLE_EQ(SensorModel::nearFraction(6.0, 5.0, 6.0), 0.0);
+}
+
+// The edge's offset in a uniform disk: the inverse of the segment's area fraction
+// F(s) = 1/2 + (s·√(1 − s²) + asin s)/π, and the chord's closed forms at s = 0 and s = ±1/2
+// (a chord at half the radius cuts off (π/3 − √3/4)/π of the disk).
+TEST(SensorModel, DiskEdgeOffsetInvertsTheSegmentArea) {
+  for (double s = -1.0; s <= 1.0; s += 0.0625) {
+    const double F = 0.5 + (s * std::sqrt(1 - s * s) + std::asin(s)) / kPi;
+    EXPECT_NEAR(SensorModel::diskEdgeOffset(F), s, 1e-9) << s;
+  }
+  EXPECT_NEAR(SensorModel::diskEdgeOffset(0.5), 0.0, 1e-12);
+  const double cap = (kPi / 3 - std::sqrt(3.0) / 4) / kPi;
+  EXPECT_NEAR(SensorModel::diskEdgeOffset(cap), -0.5, 1e-9);
+  EXPECT_NEAR(SensorModel::diskEdgeOffset(1 - cap), 0.5, 1e-9);
+  // Clamped. F is flat at ±1 (1 − F(1 − ε) ≈ 0.6·ε^1.5, below a double's resolution for
+  // ε < 1e-10), so the ends are found to that.
+  EXPECT_NEAR(SensorModel::diskEdgeOffset(-0.3), -1.0, 1e-9);
+  EXPECT_NEAR(SensorModel::diskEdgeOffset(1.7), 1.0, 1e-9);
 }
 
 TEST(SensorModel, ValidateNamesEachFieldOutOfRange) {
