@@ -524,11 +524,11 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   const int f0 = far_mixed ? r1 - d : r1;
   const double fa = far_mixed ? far1 : far0, fb = far_mixed ? far2 : far1;
   if (mix && config_.sensor.mixed_pixels && std::isfinite(fb)) {
-    // Where in its footprint the mixed pixel puts the edge: the near fraction of its footprint
-    // from its range between the two surfaces carried to it, the footprint a disk one footprint
-    // radius (a scanlines) wide either side of its centre. The near surface reaches the far end
-    // of what that fraction allows, with the cubature's error and 2σ of the fraction's noise; the
-    // far one, to the edge's estimate.
+    // Where in its footprint the mixed pixel puts the edge: the near fraction of its footprint,
+    // from its range between the two surfaces carried to it, read as a uniform disk's (radius
+    // `radius` scanlines about its centre). The near surface reaches the far end of what that
+    // fraction allows, with the cubature's error and 2σ of the fraction's noise; the far one, the
+    // edge's estimate (docs/locus.md, "Range shadows").
     const double inv_n = fit.inverseAt(1.0), inv_f = 2 / fa - 1 / fb;
     if (inv_f > 0 && inv_n > inv_f) {
       const double rho_m = near_mixed ? near0 : far0, rho_n = 1 / inv_n, rho_f = 1 / inv_f;
