@@ -13,6 +13,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <string_view>
 #include <utility>
@@ -561,7 +562,16 @@ perception::RegistrationConfig registrationConfig(const Scenario& sc) {
   c.locus = locusConfig(sc);
   c.locus.trust_edge_samples = true;  // maps to match, not to stand on (perception::LocusConfig)
   c.prior_translation_m = std::sqrt(3.0) * kMaxInitialTranslationM;
-  c.prior_rotation_deg = kMaxInitialRotationDeg;
+  // Each angle within kMaxInitialRotationDeg: the error's rotation angle is at most the largest
+  // over the box's corners (55.8° for 30°), as the translation's is the box's diagonal.
+  double widest = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const Eigen::Vector3d rpy = kMaxInitialRotationDeg * std::numbers::pi / 180 *
+                                Eigen::Vector3d(corner & 1 ? 1 : -1, corner & 2 ? 1 : -1, corner & 4 ? 1 : -1);
+    const Eigen::AngleAxisd turn(perception::sensorPose(Eigen::Vector3d::Zero(), rpy).linear());
+    widest = std::max(widest, turn.angle() * 180 / std::numbers::pi);
+  }
+  c.prior_rotation_deg = widest;
   return c;
 }
 

@@ -137,7 +137,8 @@ struct Scenario {
 
 // What the matchers are told (docs/matching.md): the locus settings and sensor model of the map
 // section, and the rover's prior on its dead-reckoning error, the bounds of the initial_error key
-// (|x|, |y|, |z| ≤ 3 m, each angle ≤ 30°), not the error itself.
+// (|x|, |y|, |z| ≤ 3 m, each angle ≤ 30°: in all at most 3√3 m and a 55.8° turn), not the
+// error itself.
 perception::RegistrationConfig registrationConfig(const Scenario& sc);
 // The locus settings of the map section with the scenario's sensor model: how any stage maps a scan.
 perception::LocusConfig locusConfig(const Scenario& sc);

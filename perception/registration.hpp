@@ -29,7 +29,9 @@ struct RegistrationConfig {
   // The rover's prior on its dead-reckoning error: translation (m) and rotation (degrees) at most
   // these. A feature at distance d from sensor J moves by at most prior_translation_m +
   // 2·sin(prior_rotation/2)·d between T_0 and the truth (the max_shift_m given to matchFeatures,
-  // d the farthest corner of map I's grid); the rotation bounds match.max_rotation_deg.
+  // d the farthest corner of map I's grid); the rotation bounds match.max_rotation_deg. Both are
+  // totals: eval's registrationConfig sets those of the scenario's per-axis bounds (the box's
+  // diagonal, 3√3 m, and its widest turn, 55.8° for 30° per angle: docs/matching.md).
   double prior_translation_m = 5.2;
   double prior_rotation_deg = 30;
   IconicOptions iconic;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "eval/scenario.hpp"
+#include "perception/sensor_geometry.hpp"
 
 namespace ambler::eval {
 namespace {
@@ -265,6 +266,35 @@ TEST(ScenarioDefaults, SensorDefaultsAreTheErimValues) {
   const Scenario written = parseScenario(kMinimal + "sensor: {fov_deg: [30, 80]}\n", kFile);
   EXPECT_SAME(written.sensor.fov_v_rad, perception::SensorModel{}.fov_v_rad);
   EXPECT_SAME(written.sensor.fov_h_rad, perception::SensorModel{}.fov_h_rad);
+}
+
+// The rover's prior, which feature matching's search is held to, covers every error the
+// scenario allows: each coordinate within 3 m (the box's diagonal, 3√3 m) and each angle within
+// 30°, whose rotation is R = Rz(yaw)·Ry(roll)·Rx(pitch) with trace ca·cb + ca·cc + cb·cc + sa·sb·sc;
+// at a corner with an odd number of −30° that is 3·(3/4) − 1/8, so the widest turn is
+// acos((2.125 − 1)/2) = acos(9/16) = 55.77°, not 30°. Sampled errors inside the box never turn
+// further, and the corners reach it.
+TEST(ScenarioDefaults, RegistrationPriorCoversEveryAllowedError) {
+  const perception::RegistrationConfig c = registrationConfig(parseScenario(kMinimal, kFile));
+  const double widest_deg = std::acos(9.0 / 16.0) * 180 / std::numbers::pi;
+  EXPECT_NEAR(c.prior_rotation_deg, widest_deg, 1e-9);
+  EXPECT_NEAR(c.prior_translation_m, 3 * std::sqrt(3.0), 1e-12);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> angle(-30, 30);
+  double most = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const Eigen::Vector3d rpy(angle(rng), angle(rng), angle(rng));
+    const double turn =
+        Eigen::AngleAxisd(perception::sensorPose(Eigen::Vector3d::Zero(), rpy * std::numbers::pi / 180).linear()).angle();
+    most = std::max(most, turn * 180 / std::numbers::pi);
+  }
+  EXPECT_LE(most, c.prior_rotation_deg + 1e-9);
+  EXPECT_GT(most, 45.0);  // well past the 30° the prior used to be
+  const double corner = Eigen::AngleAxisd(perception::sensorPose(Eigen::Vector3d::Zero(),
+                                                                 Eigen::Vector3d(-30, -30, -30) * std::numbers::pi / 180)
+                                              .linear())
+                            .angle();
+  EXPECT_NEAR(corner * 180 / std::numbers::pi, widest_deg, 1e-9);
 }
 
 TEST(ScenarioDefaults, OtherDefaultsAreTheDocumentedOnes) {

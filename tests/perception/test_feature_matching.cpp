@@ -9,6 +9,7 @@
 #include <random>
 
 #include "perception/feature_matching.hpp"
+#include "perception/sensor_geometry.hpp"
 
 namespace ambler::perception {
 namespace {
@@ -139,9 +140,10 @@ TEST(FeatureMatching, HonoursThePriorsRotationBound) {
   FeatureMatchConfig c;
   c.max_rotation_deg = 20;  // the truth is 30° from T_0
   const FeatureMatch m = matchFeatures(f1, f2, knownMap(), PoseVector::Zero(), c);
-  if (m.found)
+  if (m.found) {
     EXPECT_LE(poseError(Eigen::Isometry3d::Identity(), poseFromVector(m.nu)).rotation_deg,
               20 + 3 * m.rotation_sigma_deg + 1e-9);
+  }
   EXPECT_GT(poseError(paperCase(), poseFromVector(m.nu)).rotation_deg, 5.0);
 }
 
@@ -165,6 +167,28 @@ TEST(FeatureMatching, TheTruthAtThePriorsBoundIsKept) {
   }
   std::printf("fits past the 30° bound: %d of 20\n", past_bound);
   EXPECT_GT(past_bound, 0);  // the case the margin exists for did occur
+}
+
+// The scenario's prior bounds each angle of the dead-reckoning error by 30°; a composition of
+// three such angles turns by up to acos(9/16) = 55.8° (registrationConfig's prior,
+// ScenarioDefaults.RegistrationPriorCoversEveryAllowedError). Truth at that corner, features with
+// 3 cm of noise: a search held to 30° of total turn can never keep the true pairing; held to
+// 55.8° it finds it.
+TEST(FeatureMatching, TruthTurnedByThreeAnglesAtTheirBoundIsFound) {
+  const std::vector<Feature> f1 = scene(7);
+  const Eigen::Isometry3d T = sensorPose(Eigen::Vector3d(0.5, -0.3, 0.1), Eigen::Vector3d(-30, -30, -30) * kDeg);
+  std::vector<std::pair<int, int>> truth;
+  const std::vector<Feature> f2 = secondView(f1, T, 0.03, &truth, 3);
+  FeatureMatchConfig config;
+  config.max_rotation_deg = std::acos(9.0 / 16.0) / kDeg;
+  const FeatureMatch m = matchFeatures(f1, f2, knownMap(), PoseVector::Zero(), config);
+  ASSERT_TRUE(m.found);
+  EXPECT_EQ(m.pairs, truth);
+  const PoseError e = poseError(T, poseFromVector(m.nu));
+  EXPECT_LT(e.rotation_deg, 3 * m.rotation_sigma_deg + 1e-9);
+  config.max_rotation_deg = 30;
+  const FeatureMatch held = matchFeatures(f1, f2, knownMap(), PoseVector::Zero(), config);
+  EXPECT_TRUE(!held.found || held.pairs != truth);
 }
 
 TEST(FeatureMatching, NothingToMatchLeavesTheInitialEstimate) {
