@@ -13,7 +13,6 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
-#include <numbers>
 #include <sstream>
 #include <string_view>
 #include <utility>
@@ -316,7 +315,7 @@ MapSpec readMap(const Reader& reader, const YAML::Node& node) {
 }
 
 MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int views) {
-  const Fields f(reader, node, "matching", {"pairs", "methods", "initial_error", "success"});
+  const Fields f(reader, node, "matching", {"pairs", "methods", "initial_error", "success", "prior"});
   MatchingSpec m;
   if (views < 2) reader.fail("matching", "needs at least two views, the scenario has " + std::to_string(views));
   if (const auto p = f.get("pairs")) {
@@ -362,6 +361,11 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
     const Fields fs(reader, *s, "matching.success", {"translation_m", "rotation_deg"});
     m.success_translation_m = fs.number("translation_m", kPositive, m.success_translation_m);
     m.success_rotation_deg = fs.number("rotation_deg", kPositive, m.success_rotation_deg);
+  }
+  if (const auto p = f.get("prior")) {
+    const Fields fp(reader, *p, "matching.prior", {"translation_m", "rotation_deg"});
+    m.prior_translation_m = fp.number("translation_m", kPositive, m.prior_translation_m);
+    m.prior_rotation_deg = fp.number("rotation_deg", {0.0, 180.0, true, false}, m.prior_rotation_deg);
   }
   return m;
 }
@@ -561,17 +565,9 @@ perception::RegistrationConfig registrationConfig(const Scenario& sc) {
   perception::RegistrationConfig c;
   c.locus = locusConfig(sc);
   c.locus.trust_edge_samples = true;  // maps to match, not to stand on (perception::LocusConfig)
-  c.prior_translation_m = std::sqrt(3.0) * kMaxInitialTranslationM;
-  // Each angle within kMaxInitialRotationDeg: the error's rotation angle is at most the largest
-  // over the box's corners (55.8° for 30°), as the translation's is the box's diagonal.
-  double widest = 0;
-  for (int corner = 0; corner < 8; ++corner) {
-    const Eigen::Vector3d rpy = kMaxInitialRotationDeg * std::numbers::pi / 180 *
-                                Eigen::Vector3d(corner & 1 ? 1 : -1, corner & 2 ? 1 : -1, corner & 4 ? 1 : -1);
-    const Eigen::AngleAxisd turn(perception::sensorPose(Eigen::Vector3d::Zero(), rpy).linear());
-    widest = std::max(widest, turn.angle() * 180 / std::numbers::pi);
-  }
-  c.prior_rotation_deg = widest;
+  const MatchingSpec m = sc.matching ? *sc.matching : MatchingSpec{};
+  c.prior_translation_m = m.prior_translation_m;
+  c.prior_rotation_deg = m.prior_rotation_deg;
   return c;
 }
 

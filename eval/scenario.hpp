@@ -76,6 +76,13 @@ struct MatchingSpec {
   ViewSpec initial_error;                  // the rover's dead-reckoning error E: T_0 = T_IJ·E
   double success_translation_m = 0.05;
   double success_rotation_deg = 0.5;
+  // The rover's prior on its dead-reckoning error, as totals: how far the truth may lie from T_0
+  // in translation (m) and in turn (degrees). Feature matching searches no further
+  // (docs/matching.md). Default: what initial_error's bounds allow, each coordinate within 3 m
+  // (the box's diagonal, 3√3 m) and each angle within 30° (their widest composition,
+  // acos(9/16) = 55.8°).
+  double prior_translation_m = 5.196152422706632;
+  double prior_rotation_deg = 55.77113367218742;
 
   // What the rover believes of sensor J's pose in sensor I's frame, given the truth T_IJ:
   // T_0 = T_IJ·E.
@@ -136,9 +143,8 @@ struct Scenario {
 };
 
 // What the matchers are told (docs/matching.md): the locus settings and sensor model of the map
-// section, and the rover's prior on its dead-reckoning error, the bounds of the initial_error key
-// (|x|, |y|, |z| ≤ 3 m, each angle ≤ 30°: in all at most 3√3 m and a 55.8° turn), not the
-// error itself.
+// section, and the rover's prior on its dead-reckoning error (matching.prior; by default what the
+// initial_error key's bounds allow: 3√3 m and a 55.8° turn), not the error itself.
 perception::RegistrationConfig registrationConfig(const Scenario& sc);
 // The locus settings of the map section with the scenario's sensor model: how any stage maps a scan.
 perception::LocusConfig locusConfig(const Scenario& sc);

@@ -182,6 +182,7 @@ std::string resolvedYaml(const Scenario& s) {
          ", rpy_deg: " + list({deg(e.rpy_rad.x()), deg(e.rpy_rad.y()), deg(e.rpy_rad.z())}) + "}\n";
     y += "  success: {translation_m: " + num(m.success_translation_m) + ", rotation_deg: " +
          num(m.success_rotation_deg) + "}\n";
+    y += "  prior: {translation_m: " + num(m.prior_translation_m) + ", rotation_deg: " + num(m.prior_rotation_deg) + "}\n";
   }
   if (s.merge) {
     const auto& m = *s.merge;

@@ -112,6 +112,8 @@ void expectSame(const Scenario& a, const Scenario& b) {
     }
     EXPECT_SAME(a.matching->success_translation_m, b.matching->success_translation_m);
     EXPECT_SAME(a.matching->success_rotation_deg, b.matching->success_rotation_deg);
+    EXPECT_SAME(a.matching->prior_translation_m, b.matching->prior_translation_m);
+    EXPECT_SAME(a.matching->prior_rotation_deg, b.matching->prior_rotation_deg);
   }
 }
 
@@ -268,12 +270,12 @@ TEST(ScenarioDefaults, SensorDefaultsAreTheErimValues) {
   EXPECT_SAME(written.sensor.fov_h_rad, perception::SensorModel{}.fov_h_rad);
 }
 
-// The rover's prior, which feature matching's search is held to, covers every error the
-// scenario allows: each coordinate within 3 m (the box's diagonal, 3√3 m) and each angle within
-// 30°, whose rotation is R = Rz(yaw)·Ry(roll)·Rx(pitch) with trace ca·cb + ca·cc + cb·cc + sa·sb·sc;
-// at a corner with an odd number of −30° that is 3·(3/4) − 1/8, so the widest turn is
-// acos((2.125 − 1)/2) = acos(9/16) = 55.77°, not 30°. Sampled errors inside the box never turn
-// further, and the corners reach it.
+// The rover's prior by default (matching.prior absent), which feature matching's search is held
+// to, covers every error the scenario allows: each coordinate within 3 m (the box's diagonal,
+// 3√3 m) and each angle within 30°, whose rotation is R = Rz(yaw)·Ry(roll)·Rx(pitch) with trace
+// ca·cb + ca·cc + cb·cc + sa·sb·sc; at a corner with an odd number of −30° that is 3·(3/4) − 1/8,
+// so the widest turn is acos((2.125 − 1)/2) = acos(9/16) = 55.77°, not 30°. Sampled errors inside
+// the box never turn further, and the corners reach it.
 TEST(ScenarioDefaults, RegistrationPriorCoversEveryAllowedError) {
   const perception::RegistrationConfig c = registrationConfig(parseScenario(kMinimal, kFile));
   const double widest_deg = std::acos(9.0 / 16.0) * 180 / std::numbers::pi;
@@ -786,12 +788,18 @@ TEST(ScenarioMatching, DefaultsAndRoundTrip) {
   EXPECT_EQ(d.matching->initial_error.xyz_m, Eigen::Vector3d::Zero());
   EXPECT_EQ(d.matching->success_translation_m, 0.05);
   EXPECT_EQ(d.matching->success_rotation_deg, 0.5);
+  EXPECT_EQ(registrationConfig(d).prior_rotation_deg, d.matching->prior_rotation_deg);  // the box's widest turn
   expectRoundTrip(d);
   const Scenario full = parseScenario(kThreeViews + "matching: {pairs: [[0, 2], [2, 1]], methods: [iconic, iconic_lm], "
                                                     "initial_error: {xyz_m: [0.5, -0.3, 0.1], rpy_deg: [1, -2, 5]}, "
-                                                    "success: {translation_m: 0.1, rotation_deg: 1}}\n",
+                                                    "success: {translation_m: 0.1, rotation_deg: 1}, "
+                                                    "prior: {translation_m: 2.5, rotation_deg: 12}}\n",
                                       kFile);
   EXPECT_EQ(full.matching->pairs, (std::vector<std::pair<int, int>>{{0, 2}, {2, 1}}));
+  EXPECT_EQ(full.matching->prior_translation_m, 2.5);
+  EXPECT_EQ(full.matching->prior_rotation_deg, 12.0);
+  EXPECT_EQ(registrationConfig(full).prior_translation_m, 2.5);  // what feature matching is held to
+  EXPECT_EQ(registrationConfig(full).prior_rotation_deg, 12.0);
   EXPECT_EQ(full.matching->methods, (std::vector<MatchMethod>{MatchMethod::Iconic, MatchMethod::IconicLm}));
   EXPECT_NEAR(full.matching->initial_error.rpy_rad.z(), 5 * std::numbers::pi / 180, 1e-15);
   expectRoundTrip(full);
@@ -811,6 +819,9 @@ TEST(ScenarioMatching, RefusesBadInput) {
   expectError(kThreeViews + "matching: {initial_error: {rpy_deg: [0, 0, 40]}}\n", "matching.initial_error.rpy_deg[2]",
               "in [-30, 30]");
   expectError(kThreeViews + "matching: {success: {translation_m: 0}}\n", "matching.success.translation_m", "> 0");
+  expectError(kThreeViews + "matching: {prior: {translation_m: -1}}\n", "matching.prior.translation_m", "> 0");
+  expectError(kThreeViews + "matching: {prior: {rotation_deg: 190}}\n", "matching.prior.rotation_deg", "in (0, 180]");
+  expectError(kThreeViews + "matching: {prior: {rotation: 10}}\n", "matching.prior.rotation", "unknown key");
   expectError(kThreeViews + "matching: {pair: [[0, 1]]}\n", "matching.pair", "unknown key (did you mean pairs?)");
   expectError(kMinimal + "map: {}\nmatching: {}\n", "matching", "at least two views");
   expectError("name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}, {xyz_m: [1, 0, 1]}]\nmatching: {}\n",
