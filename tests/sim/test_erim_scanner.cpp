@@ -202,6 +202,19 @@ TEST(ErimScanner, DropoutFraction) {
   EXPECT_NEAR(p, c.dropout, 5 * std::sqrt(c.dropout * (1 - c.dropout) / hits));
 }
 
+// The ideal sensor with mixed pixels and a wide footprint (1°, several pixels straddle an edge):
+// rows × cols over 10° × fov_h_deg.
+perception::SensorModel wideFootprint(int rows, int cols, double fov_h_deg) {
+  perception::SensorModel c = idealSensor();
+  c.mixed_pixels = true;
+  c.rows = rows;
+  c.cols = cols;
+  c.fov_v_rad = 10 * kDeg;
+  c.fov_h_rad = fov_h_deg * kDeg;
+  c.beam_divergence_rad = 1.0 * kDeg;
+  return c;
+}
+
 // A mixed pixel lies between the two surfaces: a wall face at y = 5 m covering x < 0 in front
 // of a backdrop at y = 10 m. A footprint straddling the wall's edge returns a range between the
 // wall's and the backdrop's (the power-weighted mean of its sub-rays), never outside them; away
@@ -214,13 +227,7 @@ TEST(ErimScanner, MixedPixelLiesBetweenTheTwoSurfaces) {
     <geom type="box" size="20 0.05 20" pos="0 10.05 0"/>
   </worldbody>
 </mujoco>)");
-  perception::SensorModel c = idealSensor();
-  c.mixed_pixels = true;
-  c.rows = 8;
-  c.cols = 64;
-  c.fov_v_rad = 10 * kDeg;
-  c.fov_h_rad = 20 * kDeg;
-  c.beam_divergence_rad = 1.0 * kDeg;  // a wide footprint: several pixels straddle the edge
+  const perception::SensorModel c = wideFootprint(8, 64, 20);
   const Scan scan = ErimScanner(*w.scene, c).scan(Eigen::Isometry3d::Identity(), 1);
   int mixed = 0;
   for (int r = 0; r < c.rows; ++r)
@@ -254,13 +261,7 @@ TEST(ErimScanner, MixedPixelLiesBetweenTheTwoSurfaces) {
 // and 90°, within 2 % of a for the oblique edges at these ≤ 7° angles); the two surfaces' ranges
 // vary over the footprint by under 0.2 %, which moves A by under 0.01.
 TEST(ErimScanner, MixedPixelsPlaceTheEdgeWithinTheCubaturesError) {
-  perception::SensorModel c = idealSensor();
-  c.mixed_pixels = true;
-  c.rows = 64;
-  c.cols = 64;
-  c.fov_v_rad = 10 * kDeg;
-  c.fov_h_rad = 10 * kDeg;
-  c.beam_divergence_rad = 1.0 * kDeg;
+  const perception::SensorModel c = wideFootprint(64, 64, 10);
   const double a = 0.5 * c.beam_divergence_rad;
   double worst = 0;
   for (const double beta : {0.0, 20.0, 45.0, 70.0, 90.0}) {
