@@ -565,7 +565,8 @@ perception::RegistrationConfig registrationConfig(const Scenario& sc) {
   perception::RegistrationConfig c;
   c.locus = locusConfig(sc);
   c.locus.trust_edge_samples = true;  // maps to match, not to stand on (perception::LocusConfig)
-  const MatchingSpec m = sc.matching ? *sc.matching : MatchingSpec{};
+  const MatchingSpec defaults;
+  const MatchingSpec& m = sc.matching ? *sc.matching : defaults;
   c.prior_translation_m = m.prior_translation_m;
   c.prior_rotation_deg = m.prior_rotation_deg;
   return c;

@@ -521,15 +521,18 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   // Scanlines past n0 towards the far side (the near surface) and past f0 towards the near side
   // (the far surface); a mixed pixel lies one scanline past each.
   double t_near = mix ? 1.5 : 1.0, t_far = mix ? 1.0 : 0.5;
+  // The far surface: last clean sample at f0, range a, the sample past it b; its inverse range
+  // carried t scanlines past f0, linearly.
   const int f0 = far_mixed ? r1 - d : r1;
   const double fa = far_mixed ? far1 : far0, fb = far_mixed ? far2 : far1;
+  const auto farInverseAt = [&](double t) { return 1 / fa + t * (1 / fa - 1 / fb); };
   if (mix && config_.sensor.mixed_pixels && std::isfinite(fb)) {
     // Where in its footprint the mixed pixel puts the edge: the near fraction of its footprint,
     // from its range between the two surfaces carried to it, read as a uniform disk's (radius
     // `radius` scanlines about its centre). The near surface reaches the far end of what that
     // fraction allows, with the cubature's error and 2σ of the fraction's noise; the far one, the
     // edge's estimate (docs/locus.md, "Range shadows").
-    const double inv_n = fit.inverseAt(1.0), inv_f = 2 / fa - 1 / fb;
+    const double inv_n = fit.inverseAt(1.0), inv_f = farInverseAt(1.0);
     if (inv_f > 0 && inv_n > inv_f) {
       const double rho_m = near_mixed ? near0 : far0, rho_n = 1 / inv_n, rho_f = 1 / inv_f;
       const double A = SensorModel::nearFraction(rho_m, rho_n, rho_f);
@@ -549,9 +552,8 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   // the shadow (each σ_ext more costs shadow recall: docs/locus.md has the trade's figures).
   const double sigma_ext = fit.sigma(config_.sensor.rangeVariance(1 / fit.at_mean), t_near);
   if (!(inv_near > 0) || lineAt(n0 - t_near * d) < 1 / inv_near + sigma_ext) return true;
-  // The far surface: last clean sample at f0, range a, the sample past it b.
-  if (std::isfinite(fb) && lineAt(f0 + t_far * d) * (1 / fa + t_far * (1 / fa - 1 / fb)) >= 1)
-    return true;  // behind it there
+  // The far surface, carried t_far scanlines: the line behind it there.
+  if (std::isfinite(fb) && lineAt(f0 + t_far * d) * farInverseAt(t_far) >= 1) return true;
   return false;
 }
 
