@@ -9,6 +9,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace ambler::perception {
@@ -221,23 +222,105 @@ void membraneRow(const float* __restrict x, std::ptrdiff_t v, int cols, const No
   }
 }
 
+// The edge's continuation along its line (docs/range_edges.md, "Continuing an edge"). A link
+// parallel to a broken one and beside it across the edge's line (for a down link, the down links
+// of the columns either side, one row up or down) is on the same occluding contour if its raw
+// excess τ₀ = k·(u_j − u_i − s), the data's jump beyond the trend in noise units before the
+// membrane smooths it, has the broken link's sign. Two rules, both on τ₀:
+//  - bridging: a link with |τ₀| > bridge_h breaks when broken links of its sign lie on both
+//    sides within bridge_span pixels along the line (a gap in a contour the detector found);
+//  - growth: a link with |τ₀| > grow_h breaks beside a broken link of its sign, and so on along
+//    the line (a contour that fades below h0, e.g. where quantisation rounds a lip's jump down).
+// Both start from the membrane's links, so the result does not depend on the order of the scan.
+void continueEdges(const Membrane& m, const GncConfig& config, RangeLinks& links) {
+  const int rows = m.rows, cols = m.cols;
+  const float* u = m.a(Membrane::kU);
+  // τ₀ of the link (down or right) from (r, c); 0 where the link does not exist.
+  auto raw = [&](bool down, int r, int c) -> float {
+    if (r < 0 || c < 0 || r >= rows - (down ? 1 : 0) || c >= cols - (down ? 0 : 1)) return 0.0f;
+    const std::size_t i = m.at(r, c);
+    if (down) return m.a(Membrane::kKDown)[i] * (u[i + m.stride] - u[i] - m.a(Membrane::kSDown)[i]);
+    return m.a(Membrane::kKRight)[i] * (u[m.at(r, c + 1)] - u[i] - m.a(Membrane::kSRight)[i]);
+  };
+  // Link (r, c) shifted j pixels along the line and b across it: for a down link the line runs
+  // along the row, for a right link along the column.
+  auto along = [](bool down, int r, int c, int j, int b) {
+    return down ? std::pair{r + b, c + j} : std::pair{r + j, c + b};
+  };
+  auto inside = [&](bool down, int r, int c) {
+    return r >= 0 && c >= 0 && r < rows - (down ? 1 : 0) && c < cols - (down ? 0 : 1);
+  };
+  if (config.bridge_h > 0) {
+    const RangeLinks found = links;
+    const float t_low = float(config.bridge_h);
+    // Whether a link the membrane broke, of τ₀'s sign, lies within bridge_span on side `dir`.
+    auto flanked = [&](bool down, int r, int c, int dir, float t) {
+      const Raster<std::uint8_t>& f = down ? found.down : found.right;
+      for (int j = 1; j <= config.bridge_span; ++j)
+        for (int b = -1; b <= 1; ++b) {
+          const auto [rr, cc] = along(down, r, c, dir * j, b);
+          if (inside(down, rr, cc) && f(rr, cc) && (raw(down, rr, cc) > 0) == (t > 0)) return true;
+        }
+      return false;
+    };
+    for (const bool down : {true, false})
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) {
+          std::uint8_t& broken = down ? links.down(r, c) : links.right(r, c);
+          if (broken) continue;
+          const float t = raw(down, r, c);
+          if (std::abs(t) > t_low && flanked(down, r, c, -1, t) && flanked(down, r, c, 1, t)) broken = 1;
+        }
+  }
+  if (config.grow_h > 0) {
+    const float t_low = float(config.grow_h);
+    struct Link {
+      int r, c;
+      bool down;
+      float t;
+    };
+    std::vector<Link> stack;
+    for (const bool down : {true, false})
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c)
+          if ((down ? links.down : links.right)(r, c)) stack.push_back({r, c, down, raw(down, r, c)});
+    while (!stack.empty()) {
+      const Link l = stack.back();
+      stack.pop_back();
+      for (const int j : {-1, 1})
+        for (int b = -1; b <= 1; ++b) {
+          const auto [r, c] = along(l.down, l.r, l.c, j, b);
+          if (!inside(l.down, r, c)) continue;
+          std::uint8_t& broken = l.down ? links.down(r, c) : links.right(r, c);
+          const float t = raw(l.down, r, c);
+          if (broken || !(std::abs(t) > t_low) || (t > 0) != (l.t > 0)) continue;
+          broken = 1;
+          stack.push_back({r, c, l.down, t});
+        }
+    }
+  }
+}
+
 void requireConfig(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(std::string("GncConfig: ") + what);
 }
 
 }  // namespace
 
-Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& config) {
+RangeLinks detectBrokenLinks(const RangeImage& image, const GncConfig& config) {
   requireConfig(config.lambda > 0 && std::isfinite(config.lambda), "lambda must be positive");
   requireConfig(config.h0 > 0 && std::isfinite(config.h0), "h0 must be positive");
   requireConfig(config.surface_sigma_m >= 0 && std::isfinite(config.surface_sigma_m),
                 "surface_sigma_m must be non-negative");
   requireConfig(config.sweeps >= 1, "sweeps must be at least 1");
+  requireConfig(config.bridge_h >= 0 && std::isfinite(config.bridge_h), "bridge_h must be non-negative");
+  requireConfig(config.bridge_span >= 1, "bridge_span must be at least 1");
+  requireConfig(config.grow_h >= 0 && std::isfinite(config.grow_h), "grow_h must be non-negative");
   requireConfig(config.sensor.noise_k >= 0 && config.sensor.quantization_m >= 0,
                 "sensor noise_k and quantization_m must be non-negative");
   const int rows = image.rows(), cols = image.cols();
-  Raster<std::uint8_t> edges(rows, cols);
-  if (rows == 0 || cols == 0) return edges;
+  RangeLinks links{Raster<std::uint8_t>::Zero(rows, cols), Raster<std::uint8_t>::Zero(rows, cols)};
+  if (rows == 0 || cols == 0) return links;
   const long pixels = long(rows) * cols;
 
   // u = 1/ρ in image order, NaN where there is no data, with three NaN rows and columns either
@@ -281,18 +364,25 @@ Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& 
     if (p <= p_end) break;
   }
 
-  // The line process: a link is broken where the final |τ| exceeds √α/λ = h0/√(2λ); a pixel is an
-  // edge if any of its four links is.
+  // The line process: a link is broken where the final |τ| exceeds √α/λ = h0/√(2λ).
   const float t_break = float(config.h0 / std::sqrt(2.0 * config.lambda));
   forRows(rows, pixels, [&](int r0, int r1) {
-    std::vector<unsigned char> right(cols), down(cols), down_above(cols, 0);
-    if (r0 > 0) m.brokenLinks(r0 - 1, t_break, right.data(), down_above.data());
-    for (int r = r0; r < r1; ++r) {
-      m.brokenLinks(r, t_break, right.data(), down.data());
+    for (int r = r0; r < r1; ++r) m.brokenLinks(r, t_break, &links.right(r, 0), &links.down(r, 0));
+  });
+  continueEdges(m, config, links);
+  return links;
+}
+
+Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& config) {
+  const RangeLinks links = detectBrokenLinks(image, config);
+  const int rows = image.rows(), cols = image.cols();
+  Raster<std::uint8_t> edges(rows, cols);
+  // A pixel is an edge if any of its four links is broken.
+  forRows(rows, long(rows) * cols, [&](int r0, int r1) {
+    for (int r = r0; r < r1; ++r)
       for (int c = 0; c < cols; ++c)
-        edges(r, c) = right[c] | (c > 0 ? right[c - 1] : 0) | down[c] | down_above[c];
-      std::swap(down, down_above);
-    }
+        edges(r, c) = links.right(r, c) | (c > 0 ? links.right(r, c - 1) : 0) | links.down(r, c) |
+                      (r > 0 ? links.down(r - 1, c) : 0);
   });
   return edges;
 }

@@ -23,6 +23,12 @@ struct GncConfig {
   // is not linear in 1/ρ from pixel to pixel), m: added to σ_ρ in quadrature, so that a
   // noise-free sensor does not break links at every pebble (docs/range_edges.md).
   double surface_sigma_m = 0.02;
+  // The edge continued along its line from the links the membrane broke (docs/range_edges.md,
+  // "Continuing an edge"), on a link's raw excess beyond the trend in the same σ units as h0,
+  // of the broken link's sign; 0 switches a rule off.
+  double bridge_h = 3.0;  // a gap of up to bridge_span links with broken links on both sides
+  int bridge_span = 2;
+  double grow_h = 4.5;    // beside a broken link, repeatedly
 };
 
 // The edges of `image`: 1 where a pixel touches a depth discontinuity (both pixels either side of
@@ -30,6 +36,14 @@ struct GncConfig {
 // a valid pixel next to an invalid one is not an edge by itself. Throws
 // std::invalid_argument for a config out of range.
 Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& config = {});
+
+// The broken links behind detectRangeEdges: right(r, c) = 1 where the link joining (r, c) and
+// (r, c + 1) is broken, down(r, c) = 1 where the link joining (r, c) and (r + 1, c) is (the last
+// column's right links and the last row's down links do not exist and are 0).
+struct RangeLinks {
+  Raster<std::uint8_t> right, down;
+};
+RangeLinks detectBrokenLinks(const RangeImage& image, const GncConfig& config = {});
 
 // Unwraps ranges folded by the ambiguity interval A, in place. The seed is the longest continuous
 // stretch of the lowest row that has one (at least three pixels, each continuous with the linear

@@ -89,13 +89,14 @@ void run(RunState& s) {
       const Eigen::Vector2d xy = grid.center(r, c);
       choice.x_m = xy.x(), choice.y_m = xy.y();
       choice.truth_score = truths[m].score(r, c);
-      if (std::isfinite(choice.truth_score)) {
-        long better = 0, all = 0;
-        const auto& ts = truths[m].score;
-        for (int i = 0; i < ts.size(); ++i)
-          if (std::isfinite(ts.data()[i])) ++all, better += ts.data()[i] < choice.truth_score;
-        choice.truth_percentile = all ? double(better) / double(all) : kNaN;
-      }
+      // A cell the truth rejects (no true score: e.g. too steep for planar_fit) is worse than
+      // every true candidate: percentile 1.
+      long better = 0, all = 0;
+      const auto& ts = truths[m].score;
+      for (int i = 0; i < ts.size(); ++i)
+        if (std::isfinite(ts.data()[i]))
+          ++all, better += !std::isfinite(choice.truth_score) || ts.data()[i] < choice.truth_score;
+      choice.truth_percentile = all ? double(better) / double(all) : kNaN;
     }
     s.choices.push_back(choice);
     nlohmann::ordered_json j;

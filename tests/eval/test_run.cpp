@@ -425,6 +425,11 @@ TEST(Run, FootfallStageChoosesTheLowestScoreAndScoresItOnTheTruth) {
     const double p = f["truth_percentile"].get<double>();
     EXPECT_GE(p, 0.0) << method;
     EXPECT_LE(p, 1.0) << method;
+    // A choice the truth rejects (no true score) is worse than every true candidate.
+    if (f["truth_score"].is_null()) {
+      EXPECT_EQ(p, 1.0) << method;
+    }
+
   }
 }
 

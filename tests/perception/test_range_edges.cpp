@@ -421,6 +421,54 @@ TEST(RangeEdges, InvalidPixelsMakeNoEdges) {
   EXPECT_GE(sc.detected, 0.9 * truth.cast<long>().sum());
 }
 
+// The edge continued along its line (docs/range_edges.md, "Continuing an edge"). A noise-free
+// plane with a step in range between two rows (the far rows moved away: a drop-off's jump), sized
+// per column so that each column's raw excess τ₀ ≈ Δ/σ is set, σ² = σ_ρ² + σ_s² the detector's
+// noise at that range (Δu = −Δ/ρ² to 3 %). Along most of the line τ₀ = 8: the membrane breaks it
+// (above h0 = 6). Weak stretches between strong ones:
+//   - ten columns at 5: beyond bridging's reach, above grow_h = 4.5: grown;
+//   - ten at 4: below grow_h, beyond bridging's reach: whole;
+//   - two at 3.5: above bridge_h = 3, flanked within bridge_span = 2: bridged;
+//   - two at 2.5: below both: whole.
+// With both rules off every weak stretch stays whole, which is what the rules are for; and no link
+// off the line breaks either way.
+TEST(RangeEdges, EdgeContinuesAlongItsLine) {
+  Rendered s = render(planeScene(Vector3d::UnitZ(), 0.0), View{});
+  const int r0 = s.image.rows() / 2, cols = s.image.cols();
+  const bool far_below = s.image.range(r0, cols / 2) > s.image.range(r0 - 1, cols / 2);  // rows ≥ r0 farther
+  const SensorModel sensor;
+  const GncConfig defaults;
+  std::vector<double> excess(cols, 8.0);
+  std::vector<bool> grown_or_bridged(cols, false);
+  for (int c = 40; c < 50; ++c) excess[c] = 5.0, grown_or_bridged[c] = true;
+  for (int c = 60; c < 70; ++c) excess[c] = 4.0;
+  excess[90] = excess[91] = 3.5, grown_or_bridged[90] = grown_or_bridged[91] = true;
+  excess[110] = excess[111] = 2.5;
+  for (int r = 0; r < s.image.rows(); ++r) {
+    if (far_below != (r >= r0)) continue;
+    for (int c = 0; c < cols; ++c) {
+      const double rho = s.image.range(far_below ? r0 - 1 : r0, c);  // the near side of the step
+      const double sigma = std::sqrt(sensor.rangeVariance(rho) + defaults.surface_sigma_m * defaults.surface_sigma_m);
+      s.image.range(r, c) += float(excess[c] * sigma);
+    }
+  }
+  const int line = r0 - 1;  // the down links (r0 − 1, c) cross the step
+  const RangeLinks links = detectBrokenLinks(s.image);
+  GncConfig off;
+  off.bridge_h = 0, off.grow_h = 0;
+  const RangeLinks membrane = detectBrokenLinks(s.image, off);
+  for (int c = 0; c < cols; ++c) {
+    EXPECT_EQ(membrane.down(line, c), excess[c] > 6) << "column " << c << ", rules off";
+    EXPECT_EQ(links.down(line, c), excess[c] > 6 || grown_or_bridged[c]) << "column " << c;
+  }
+  for (int r = 0; r + 1 < s.image.rows(); ++r)
+    for (int c = 0; c < cols; ++c)
+      if (r != line) {
+        EXPECT_EQ(links.down(r, c), 0) << r << ", " << c;
+        EXPECT_EQ(membrane.down(r, c), 0) << r << ", " << c;
+      }
+}
+
 TEST(RangeEdges, RejectsBadConfig) {
   const RangeImage image = render(planeScene(Vector3d::UnitZ(), 0.0), View{}).image;
   GncConfig bad;
@@ -431,6 +479,15 @@ TEST(RangeEdges, RejectsBadConfig) {
   EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
   bad = {};
   bad.sweeps = 0;
+  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
+  bad = {};
+  bad.bridge_h = -1;
+  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
+  bad = {};
+  bad.bridge_span = 0;
+  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
+  bad = {};
+  bad.grow_h = std::numeric_limits<double>::quiet_NaN();
   EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
   bad = {};
   bad.sensor.noise_k = -1;
