@@ -263,14 +263,27 @@ void continueEdges(const Membrane& m, const GncConfig& config, RangeLinks& links
         }
       return false;
     };
-    for (const bool down : {true, false})
+    for (const bool down : {true, false}) {
+      // The candidates: links within bridge_span of a broken one along the line (most links of an
+      // image are not, and skip τ₀).
+      const Raster<std::uint8_t>& f = down ? found.down : found.right;
+      Raster<std::uint8_t> near = Raster<std::uint8_t>::Zero(rows, cols);
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c)
+          if (f(r, c))
+            for (int j = -config.bridge_span; j <= config.bridge_span; ++j)
+              for (int b = -1; b <= 1; ++b) {
+                const auto [rr, cc] = along(down, r, c, j, b);
+                if (j != 0 && inside(down, rr, cc)) near(rr, cc) = 1;
+              }
       for (int r = 0; r < rows; ++r)
         for (int c = 0; c < cols; ++c) {
           std::uint8_t& broken = down ? links.down(r, c) : links.right(r, c);
-          if (broken) continue;
+          if (broken || !near(r, c)) continue;
           const float t = raw(down, r, c);
           if (std::abs(t) > t_low && flanked(down, r, c, -1, t) && flanked(down, r, c, 1, t)) broken = 1;
         }
+    }
   }
   if (config.grow_h > 0) {
     const float t_low = float(config.grow_h);
