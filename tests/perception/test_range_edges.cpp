@@ -471,27 +471,20 @@ TEST(RangeEdges, EdgeContinuesAlongItsLine) {
 
 TEST(RangeEdges, RejectsBadConfig) {
   const RangeImage image = render(planeScene(Vector3d::UnitZ(), 0.0), View{}).image;
-  GncConfig bad;
-  bad.lambda = 0;
-  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
-  bad = {};
-  bad.h0 = -1;
-  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
-  bad = {};
-  bad.sweeps = 0;
-  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
-  bad = {};
-  bad.bridge_h = -1;
-  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
-  bad = {};
-  bad.bridge_span = 0;
-  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
-  bad = {};
-  bad.grow_h = std::numeric_limits<double>::quiet_NaN();
-  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
-  bad = {};
-  bad.sensor.noise_k = -1;
-  EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument);
+  const std::vector<std::function<void(GncConfig&)>> breakers = {
+      [](GncConfig& c) { c.lambda = 0; },
+      [](GncConfig& c) { c.h0 = -1; },
+      [](GncConfig& c) { c.sweeps = 0; },
+      [](GncConfig& c) { c.bridge_h = -1; },
+      [](GncConfig& c) { c.bridge_span = 0; },
+      [](GncConfig& c) { c.grow_h = std::numeric_limits<double>::quiet_NaN(); },
+      [](GncConfig& c) { c.sensor.noise_k = -1; },
+  };
+  for (std::size_t i = 0; i < breakers.size(); ++i) {
+    GncConfig bad;
+    breakers[i](bad);
+    EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument) << "case " << i;
+  }
   RangeImage copy = image;
   EXPECT_THROW(unwrapRanges(copy, interval(0.0)), std::invalid_argument);
 }
