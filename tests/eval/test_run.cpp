@@ -429,7 +429,6 @@ TEST(Run, FootfallStageChoosesTheLowestScoreAndScoresItOnTheTruth) {
     if (f["truth_score"].is_null()) {
       EXPECT_EQ(p, 1.0) << method;
     }
-
   }
 }
 
