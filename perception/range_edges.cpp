@@ -235,9 +235,13 @@ void membraneRow(const float* __restrict x, std::ptrdiff_t v, int cols, const No
 void continueEdges(const Membrane& m, const GncConfig& config, RangeLinks& links) {
   const int rows = m.rows, cols = m.cols;
   const float* u = m.a(Membrane::kU);
-  // τ₀ of the link (down or right) from (r, c); 0 where the link does not exist.
+  // Whether the link (down or right) from (r, c) exists.
+  auto inside = [&](bool down, int r, int c) {
+    return r >= 0 && c >= 0 && r < rows - (down ? 1 : 0) && c < cols - (down ? 0 : 1);
+  };
+  // τ₀ of the link from (r, c); 0 where the link does not exist.
   auto raw = [&](bool down, int r, int c) -> float {
-    if (r < 0 || c < 0 || r >= rows - (down ? 1 : 0) || c >= cols - (down ? 0 : 1)) return 0.0f;
+    if (!inside(down, r, c)) return 0.0f;
     const std::size_t i = m.at(r, c);
     if (down) return m.a(Membrane::kKDown)[i] * (u[i + m.stride] - u[i] - m.a(Membrane::kSDown)[i]);
     return m.a(Membrane::kKRight)[i] * (u[m.at(r, c + 1)] - u[i] - m.a(Membrane::kSRight)[i]);
@@ -247,15 +251,14 @@ void continueEdges(const Membrane& m, const GncConfig& config, RangeLinks& links
   auto along = [](bool down, int r, int c, int j, int b) {
     return down ? std::pair{r + b, c + j} : std::pair{r + j, c + b};
   };
-  auto inside = [&](bool down, int r, int c) {
-    return r >= 0 && c >= 0 && r < rows - (down ? 1 : 0) && c < cols - (down ? 0 : 1);
-  };
+  // The links of one orientation.
+  auto of = [](auto& l, bool down) -> auto& { return down ? l.down : l.right; };
   if (config.bridge_h > 0) {
     const RangeLinks found = links;
     const float t_low = float(config.bridge_h);
     // Whether a link the membrane broke, of τ₀'s sign, lies within bridge_span on side `dir`.
     auto flanked = [&](bool down, int r, int c, int dir, float t) {
-      const Raster<std::uint8_t>& f = down ? found.down : found.right;
+      const Raster<std::uint8_t>& f = of(found, down);
       for (int j = 1; j <= config.bridge_span; ++j)
         for (int b = -1; b <= 1; ++b) {
           const auto [rr, cc] = along(down, r, c, dir * j, b);
@@ -266,7 +269,7 @@ void continueEdges(const Membrane& m, const GncConfig& config, RangeLinks& links
     for (const bool down : {true, false}) {
       // The candidates: links within bridge_span of a broken one along the line (most links of an
       // image are not, and skip τ₀).
-      const Raster<std::uint8_t>& f = down ? found.down : found.right;
+      const Raster<std::uint8_t>& f = of(found, down);
       Raster<std::uint8_t> near = Raster<std::uint8_t>::Zero(rows, cols);
       for (int r = 0; r < rows; ++r)
         for (int c = 0; c < cols; ++c)
@@ -278,7 +281,7 @@ void continueEdges(const Membrane& m, const GncConfig& config, RangeLinks& links
               }
       for (int r = 0; r < rows; ++r)
         for (int c = 0; c < cols; ++c) {
-          std::uint8_t& broken = down ? links.down(r, c) : links.right(r, c);
+          std::uint8_t& broken = of(links, down)(r, c);
           if (broken || !near(r, c)) continue;
           const float t = raw(down, r, c);
           if (std::abs(t) > t_low && flanked(down, r, c, -1, t) && flanked(down, r, c, 1, t)) broken = 1;
@@ -296,7 +299,7 @@ void continueEdges(const Membrane& m, const GncConfig& config, RangeLinks& links
     for (const bool down : {true, false})
       for (int r = 0; r < rows; ++r)
         for (int c = 0; c < cols; ++c)
-          if ((down ? links.down : links.right)(r, c)) stack.push_back({r, c, down, raw(down, r, c)});
+          if (of(links, down)(r, c)) stack.push_back({r, c, down, raw(down, r, c)});
     while (!stack.empty()) {
       const Link l = stack.back();
       stack.pop_back();
@@ -304,7 +307,7 @@ void continueEdges(const Membrane& m, const GncConfig& config, RangeLinks& links
         for (int b = -1; b <= 1; ++b) {
           const auto [r, c] = along(l.down, l.r, l.c, j, b);
           if (!inside(l.down, r, c)) continue;
-          std::uint8_t& broken = l.down ? links.down(r, c) : links.right(r, c);
+          std::uint8_t& broken = of(links, l.down)(r, c);
           const float t = raw(l.down, r, c);
           if (broken || !(std::abs(t) > t_low) || (t > 0) != (l.t > 0)) continue;
           broken = 1;
