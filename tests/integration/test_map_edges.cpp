@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <numbers>
@@ -159,6 +160,76 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
   }
   EXPECT_GE(checked_pr, 4);  // the range has poses where the image can tell
   EXPECT_EQ(checked_erim, 36);
+}
+
+// Why shadow recall ≥ 0.9 cannot hold over the whole range (docs/locus.md, "The gap at an
+// occluding edge"): two drop-offs whose lips lie δ apart inside the same scanline gap give the
+// same image, bit for bit, so any mapper gives them the same map. The cells between the two lips
+// are the visible top of the farther lip and hidden ground behind the nearer one; a map that never
+// calls a visible lip top shadow (the issue's other item) leaves them out of the nearer lip's
+// shadow, and its recall there is at most 1 − (those cells)/(its hidden cells), whatever the
+// mapper. Shown for the square lips of the issue's range with the sensor ideal (its "noise,
+// quantisation and mixed pixels off"), the lip a box's edge on a plane so that it can move by any
+// δ: the bound falls below 0.9 where the scanline gap is wide against the shadow, so no mapper
+// meets both items there. The maps of each pair are the same bits (the mapper reads nothing
+// else), this map keeps the far lip's top out of the shadow too, and its recall is the bound
+// wherever a cell is contested: it gives away nothing the image does not force.
+TEST(MapEdges, NoMapPlacesALipInsideItsScanlineGap) {
+  const auto lipScene = [](double drop_m, double x_lip) {  // the high side is x > x_lip
+    return mjcfScene("<mujoco><worldbody><geom type=\"plane\" size=\"40 40 0.1\"/><geom type=\"box\" pos=\"" +
+                     std::to_string(x_lip + 15) + " 0 " + std::to_string(drop_m / 2) + "\" size=\"15 20 " +
+                     std::to_string(drop_m / 2) + "\"/></worldbody></mujoco>");
+  };
+  const auto sameBits = [](const perception::Raster<float>& a, const perception::Raster<float>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(float) * std::size_t(a.size())) == 0;
+  };
+  const perception::SensorModel sensor = noiseFree();
+  int below = 0;
+  for (const double drop : {0.2, 0.45, 0.6})
+    for (const double h : {2.0, 4.0})
+      for (const double d : {4.0, 6.5, 10.0}) {
+        ViewSpec view;
+        view.xyz_m = {d, 0, h + drop};
+        view.rpy_rad = {0, -std::atan(h / (d + 1.0)), 90.0 * kDeg};
+        const Eigen::Isometry3d T_WS = perception::sensorPose(view.xyz_m, view.rpy_rad);
+        MapSpec map;
+        map.x_m = {-8, d};
+        map.y_m = {-5, 5};
+        const auto image = [&](const Scene& s) { return sim::ErimScanner(*s.scene, sensor).scan(T_WS, 11).image.range; };
+        const auto near_scene = lipScene(drop, 0.0);
+        const perception::Raster<float> near_image = image(*near_scene);
+        // The farthest lip, on a 1 cm grid, whose image is still the near lip's, bit for bit
+        // (bisection: a lip that can move δ unseen can move less).
+        int lo = 0, hi = 128;  // cm: lo gives the same image, hi is not known to
+        while (hi - lo > 1) {
+          const int mid = (lo + hi) / 2;
+          (sameBits(image(*lipScene(drop, -0.01 * mid)), near_image) ? lo : hi) = mid;
+        }
+        const std::string what =
+            "drop " + std::to_string(drop) + " h " + std::to_string(h) + " d " + std::to_string(d);
+        const Mapped near = mapView(*near_scene, sensor, view, map, 11);
+        const Mapped far = mapView(*lipScene(drop, -0.01 * lo), sensor, view, map, 11);
+        ASSERT_TRUE(sameBits(far.build.map.elevation(), near.build.map.elevation())) << what;
+        ASSERT_TRUE(far.build.map.state() == near.build.map.state()) << what;
+        // The far lip's visible top that is hidden behind the near lip; and its top in the shadow.
+        long contested = 0, far_top_in_shadow = 0;
+        for (int r = 0; r < near.grid.rows; ++r)
+          for (int c = 0; c < near.grid.cols; ++c) {
+            if (far.vis(r, c) != std::uint8_t(sim::Visibility::Visible) || !(near.grid.center(r, c).x() > -0.01 * lo))
+              continue;
+            contested += near.vis(r, c) == std::uint8_t(sim::Visibility::Hidden);
+            far_top_in_shadow += near.build.map.state()(r, c) == std::uint8_t(perception::CellState::Shadow);
+          }
+        const double bound = 1.0 - double(contested) / double(near.metrics.hidden);
+        std::printf("%s: the lip moves %.2f m unseen; recall at most %.3f (%ld of %ld hidden cells are the far "
+                    "lip's visible top), this map's %.3f\n",
+                    what.c_str(), 0.01 * lo, bound, contested, near.metrics.hidden, near.metrics.shadow_recall);
+        EXPECT_EQ(far_top_in_shadow, 0) << what;
+        EXPECT_LE(near.metrics.shadow_recall, bound + 1e-12) << what;
+        if (contested > 0) EXPECT_NEAR(near.metrics.shadow_recall, bound, 1e-12) << what;
+        below += bound < 0.9;
+      }
+  EXPECT_GE(below, 2);  // the issue's range has poses no mapper can meet
 }
 
 // The rule above is the run's; the maps registration matches trust the samples at edges
