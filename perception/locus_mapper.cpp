@@ -469,7 +469,9 @@ double LocusMapper::hermiteRoot(double phi_a, double y0, double g0, double phi_b
 // footprints one scanline wide) says the edge is inside its footprint, at most 1.5 scanlines past
 // the near surface's last clean sample, and its range says where: the fraction of the footprint on
 // the near surface, read as a disk's, bounds how far the near surface reaches (with the emulator's
-// cubature error and the fraction's noise) and places the far surface's end. A line that meets
+// cubature error and the fraction's noise; where that bound is the whole footprint, the next
+// footprint, read as the far surface's within the same error, bounds it: short of 2 scanlines)
+// and places the far surface's end. A line that meets
 // either extension is unseen (maybe on that surface, visible but not sampled); every other line
 // there is in the shadow.
 double LocusMapper::rangeAt(int r, const Sample& s) const {
@@ -542,7 +544,12 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
       const double sigma_A = std::sqrt(config_.sensor.rangeVariance(rho_m) + sigma_n * sigma_n +
                                        5 * config_.sensor.rangeVariance(rho_f)) / (rho_f - rho_n);
       const double radius = 0.5 * config_.sensor.beamDivergence() / dphi_;
-      t_near = 1 + radius * SensorModel::diskEdgeOffset(A + SensorModel::kCubatureFractionError + 2 * sigma_A);
+      // Where even the fraction's upper bound is the whole footprint, the pixel may lie wholly on
+      // the near surface and does not bound the edge: the next scanline's footprint, which reads
+      // as the far surface, does — its own near fraction is at most the cubature's error and 2σ.
+      const double e = SensorModel::kCubatureFractionError + 2 * sigma_A;
+      t_near = A + e < 1 ? 1 + radius * SensorModel::diskEdgeOffset(A + e)
+                         : 2 + radius * SensorModel::diskEdgeOffset(e);
       t_far = 1 - radius * SensorModel::diskEdgeOffset(A);
     }
   }
