@@ -675,8 +675,11 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   // scanlines of the bracket, or in both columns of the final cell. Edge pixels come in pairs
   // across a discontinuity, so a visible point beside one (on a ledge's lip) has edge pixels on
   // one side only and stays known. Which way the final cell's discontinuity runs: edge pixels
-  // mark both sides of a break but not its direction, so compare the cell's largest range jump
-  // across scanlines with that across columns.
+  // mark both sides of a break, so compare the cell's largest range jump across scanlines with
+  // that across columns. A shadow across columns also needs edge pixels whose breaks run across
+  // columns (range_edges.hpp: the mask's direction bits): beside a lip, whose edge pixels break
+  // across scanlines, a column jump of a count or two of quantisation is no edge, and the cell is
+  // then unseen (below), neither shadow nor known.
   const bool row1_edge = s1.edges != 0, row2_edge = s2.edges != 0;
   const unsigned e = near.edges;
   double jump_rows = 0, jump_cols = 0;
@@ -687,7 +690,13 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   }
   const bool across_rows = (row1_edge && row2_edge) || ((e & 3u) && (e & 12u) && jump_rows >= jump_cols) ||
                            (row1_edge != row2_edge && linkedMixedPixel(r1, r2, s1, s2));
-  const bool across_cols = (e & 5u) && (e & 10u) && jump_cols > jump_rows;
+  const bool beside_cols = (e & 5u) && (e & 10u) && jump_cols > jump_rows;
+  unsigned e_cols = 0;  // the cell's edge pixels with a break across columns (or no direction)
+  for (int k = 0; k < 4 && beside_cols; ++k) {
+    const unsigned bits = (e >> k & 1u) ? (*edges_)(near.r0 + k / 2, near.c0 + k % 2) : 0u;
+    if ((bits & kEdgeAcrossCols) || (bits && !(bits & kEdgeAcrossRows))) e_cols |= 1u << k;
+  }
+  const bool across_cols = beside_cols && (e_cols & 5u) && (e_cols & 10u);
   if (across_rows && meetsSurfaceInGap(r1, r2, s1, s2)) {
     hit.state = CellState::Unseen;  // maybe on a surface past its last sample
     return;
@@ -706,6 +715,10 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
       if (sc.valid && !(sc.delta < 0)) sc.valid = false;
     }
     if (sc.valid) hit.ceiling = u + sc.s * v;
+    return;
+  }
+  if (beside_cols) {
+    hit.state = CellState::Unseen;  // beside an edge, on a column jump no break explains
     return;
   }
   if (row1_edge != row2_edge && pastUntrustedEdgeSample(row1_edge, r1, r2, s1, s2)) {

@@ -393,12 +393,15 @@ Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& 
   const RangeLinks links = detectBrokenLinks(image, config);
   const int rows = image.rows(), cols = image.cols();
   Raster<std::uint8_t> edges(rows, cols);
-  // A pixel is an edge if any of its four links is broken.
+  // A pixel is an edge if any of its four links is broken; the broken ones say which way.
   forRows(rows, long(rows) * cols, [&](int r0, int r1) {
     for (int r = r0; r < r1; ++r)
-      for (int c = 0; c < cols; ++c)
-        edges(r, c) = links.right(r, c) | (c > 0 ? links.right(r, c - 1) : 0) | links.down(r, c) |
-                      (r > 0 ? links.down(r - 1, c) : 0);
+      for (int c = 0; c < cols; ++c) {
+        const bool across_rows = links.down(r, c) || (r > 0 && links.down(r - 1, c));
+        const bool across_cols = links.right(r, c) || (c > 0 && links.right(r, c - 1));
+        edges(r, c) = std::uint8_t((across_rows || across_cols ? kEdgePixel : 0) | (across_rows ? kEdgeAcrossRows : 0) |
+                                   (across_cols ? kEdgeAcrossCols : 0));
+      }
   });
   return edges;
 }

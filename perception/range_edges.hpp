@@ -31,9 +31,15 @@ struct GncConfig {
   double grow_h = 4.5;    // beside a broken link, repeatedly
 };
 
-// The edges of `image`: 1 where a pixel touches a depth discontinuity (both pixels either side of
-// it), else 0. NaN or non-positive pixels carry no data: their links neither smooth nor break, so
-// a valid pixel next to an invalid one is not an edge by itself. Throws
+// The edge mask's bits. A pixel that touches a depth discontinuity (both pixels either side of it)
+// has kEdgePixel, and which way its broken links run: across scanlines (to the pixel above or
+// below) and across columns (to the pixel left or right). A mask made elsewhere may set
+// kEdgePixel alone, "direction unknown": readers then take both directions.
+constexpr std::uint8_t kEdgePixel = 1, kEdgeAcrossRows = 2, kEdgeAcrossCols = 4;
+
+// The edges of `image`: non-zero where a pixel touches a depth discontinuity (kEdgePixel and its
+// direction bits), else 0. NaN or non-positive pixels carry no data: their links neither smooth
+// nor break, so a valid pixel next to an invalid one is not an edge by itself. Throws
 // std::invalid_argument for a config out of range.
 Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& config = {});
 

@@ -164,11 +164,14 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
 
 // The lip top with the ERIM, where the lip is a box's edge: the first lip-top cell is centred
 // 5 cm from the edge (the heightfield's lip above has a 5 cm ramp, and its cell on the ramp's upper
-// edge is not counted). Seen from 10 m, where a footprint covers 24–45 cm of ground, a pixel just
-// short of the edge may read a little past the near surface (a count of quantisation) and pass for
-// a mixed pixel wholly on the near surface; the near surface then reaches as far as the next
-// footprint, read as the far surface's within the cubature's error, allows (docs/locus.md). With
-// the footprint's own rim as the bound instead, 30 lip-top cells of these 120 scenes were shadow.
+// edge is not counted). Two things kept such cells out of the shadow (docs/locus.md), over the
+// issue's poses and 10 seeds (360 scenes). From far away, where a footprint covers 24–45 cm of
+// ground, a pixel just short of the edge may read a count past the near surface and pass for a
+// mixed pixel wholly on the near surface; the near surface then reaches as far as the next
+// footprint, read as the far surface's within the cubature's error, allows (with the footprint's
+// own rim as the bound: 30 cells, from 10 m). And the final cell's test for an edge across
+// columns counts only edge pixels whose breaks run across columns (counting the lip's edge
+// pixels, a two-count column jump beside them made 8 cells shadow, from 6.5 m).
 TEST(MapEdges, BoxEdgeLipTopsStayOutOfTheShadowWithTheErim) {
   long in_shadow = 0, lip_top = 0;
   for (const double drop : {0.2, 0.45, 0.6}) {
@@ -176,13 +179,14 @@ TEST(MapEdges, BoxEdgeLipTopsStayOutOfTheShadowWithTheErim) {
                                  std::to_string(drop / 2) + "\" size=\"15 20 " + std::to_string(drop / 2) +
                                  "\"/></worldbody></mujoco>");
     for (const double h : {2.0, 4.0})
-      for (const double angle_deg : {0.0, 30.0})
-        for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+      for (const double d : {4.0, 6.5, 10.0})
+        for (const double angle_deg : {0.0, 30.0})
+          for (std::uint64_t seed = 1; seed <= 10; ++seed) {
           ViewSpec view;
-          view.xyz_m = {10, 0, h + drop};
-          view.rpy_rad = {0, -std::atan(h / 11.0), (90.0 + angle_deg) * kDeg};
+          view.xyz_m = {d, 0, h + drop};
+          view.rpy_rad = {0, -std::atan(h / (d + 1.0)), (90.0 + angle_deg) * kDeg};
           MapSpec map;
-          map.x_m = {-8, 10};
+          map.x_m = {-8, d};
           map.y_m = {-5, 5};
           const Mapped m = mapView(*scene, perception::SensorModel{}, view, map, seed);
           for (int r = 0; r < m.grid.rows; ++r)
@@ -191,13 +195,13 @@ TEST(MapEdges, BoxEdgeLipTopsStayOutOfTheShadowWithTheErim) {
               lip_top += m.grid.center(r, c).x() < 0.1;
               const bool shadow = m.build.map.state()(r, c) == std::uint8_t(perception::CellState::Shadow);
               in_shadow += shadow;
-              EXPECT_FALSE(shadow) << "drop " << drop << " h " << h << " at " << angle_deg << " deg, seed " << seed
+              EXPECT_FALSE(shadow) << "drop " << drop << " h " << h << " d " << d << " at " << angle_deg << " deg, seed " << seed
                                    << ": lip top at y " << m.grid.center(r, c).y();
             }
         }
   }
   std::printf("lip-top cells beside the edge: %ld; visible cells of the high side in the shadow: %ld\n", lip_top, in_shadow);
-  EXPECT_GT(lip_top, 6000);  // every scene has its row of lip-top cells
+  EXPECT_GT(lip_top, 18000);  // every scene has its row of lip-top cells
 }
 
 // Why shadow recall ≥ 0.9 cannot hold over the whole range (docs/locus.md, "The gap at an
@@ -264,7 +268,9 @@ TEST(MapEdges, NoMapPlacesALipInsideItsScanlineGap) {
                     what.c_str(), 0.01 * lo, bound, contested, near.metrics.hidden, near.metrics.shadow_recall);
         EXPECT_EQ(far_top_in_shadow, 0) << what;
         EXPECT_LE(near.metrics.shadow_recall, bound + 1e-12) << what;
-        if (contested > 0) EXPECT_NEAR(near.metrics.shadow_recall, bound, 1e-12) << what;
+        if (contested > 0) {
+          EXPECT_NEAR(near.metrics.shadow_recall, bound, 1e-12) << what;
+        }
         below += bound < 0.9;
       }
   EXPECT_GE(below, 2);  // the issue's range has poses no mapper can meet

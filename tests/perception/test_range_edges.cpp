@@ -243,7 +243,7 @@ TEST(RangeEdges, PlaneWithoutNoiseHasNoEdges) {
   for (const PlaneCase& pc : planeCases()) {
     const Rendered s = renderPlane(pc);
     pixels += s.image.validCount();
-    EXPECT_EQ(detectRangeEdges(s.image).cast<int>().sum(), 0) << pc.name;
+    EXPECT_EQ((detectRangeEdges(s.image).array() != 0).cast<int>().sum(), 0) << pc.name;
   }
   EXPECT_GT(pixels, 400000);  // the sweep saw the planes, not the sky
 }
@@ -254,7 +254,7 @@ TEST(RangeEdges, PlaneFalseEdgesWithNoiseBelowBound) {
   for (const PlaneCase& pc : planeCases()) {
     Rendered s = renderPlane(pc);
     addNoise(s.image, seed++);
-    const long d = detectRangeEdges(s.image).cast<long>().sum();
+    const long d = (detectRangeEdges(s.image).array() != 0).cast<long>().sum();
     if (s.image.validCount() > 2000) {  // a fraction of fewer pixels says little
       EXPECT_LT(double(d) / s.image.validCount(), kNoiseFalseEdgeBound) << pc.name;
     }
@@ -295,21 +295,33 @@ TEST_P(LedgeDrop, EdgeLiesOnTheAnalyticOcclusion) {
   // Recall along the whole edge: in every column that sees both planes, an edge pixel within one
   // row of the analytic jump (rows r and r + 1). A mixed pixel in the top row leaves no sample of
   // the far plane in its column, so such columns are not counted.
-  int columns = 0, found = 0;
+  // The jump runs across scanlines, and the mask says so (range_edges.hpp's direction bits).
+  int columns = 0, found = 0, found_across_rows = 0;
   for (int c = 0; c < s.image.cols(); ++c)
     for (int r = lc.mixed ? 1 : 0; r + 1 < s.image.rows(); ++r)
       if (s.surface(r, c) == 1 && s.surface(r + 1, c) == 0) {
         ++columns;
-        bool hit = false;
-        for (int i = std::max(0, r - 1); i <= std::min(s.image.rows() - 1, r + 2); ++i)
+        bool hit = false, across_rows = false;
+        for (int i = std::max(0, r - 1); i <= std::min(s.image.rows() - 1, r + 2); ++i) {
           hit = hit || edges(i, c);
+          across_rows = across_rows || (edges(i, c) & perception::kEdgeAcrossRows);
+        }
         found += hit;
+        found_across_rows += across_rows;
       }
   ASSERT_GT(columns, 100) << "the edge must cross most of the image";
+  for (int r = 0; r < edges.rows(); ++r)
+    for (int c = 0; c < edges.cols(); ++c)
+      if (edges(r, c)) {  // an edge pixel says it is one, and which way at least one break runs
+        ASSERT_TRUE((edges(r, c) & perception::kEdgePixel) &&
+                    (edges(r, c) & (perception::kEdgeAcrossRows | perception::kEdgeAcrossCols)))
+            << r << ", " << c;
+      }
   const Score sc = score(edges, truth, s.image);
   RecordProperty("recall", std::to_string(double(found) / columns));
   RecordProperty("precision", std::to_string(sc.precision()));
   EXPECT_GE(double(found) / columns, 0.95);
+  EXPECT_EQ(found_across_rows, found);
   EXPECT_GE(sc.precision(), 0.95);
   EXPECT_LT(sc.falseFraction(), lc.noise ? kNoiseFalseEdgeBound : 1e-12);
 }
@@ -332,7 +344,7 @@ TEST(RangeEdges, StepUpFacingTheSensorIsNoEdge) {
       View v;
       Rendered s = render(ledgeScene(y0, 0.0, 0.4), v);
       if (noise) addNoise(s.image, 100 + std::uint64_t(y0));
-      const long d = detectRangeEdges(s.image).cast<long>().sum();
+      const long d = (detectRangeEdges(s.image).array() != 0).cast<long>().sum();
       EXPECT_LT(double(d) / s.image.validCount(), noise ? kNoiseFalseEdgeBound : 1e-12)
           << "y0 " << y0 << (noise ? " noisy" : "");
     }
@@ -399,7 +411,7 @@ TEST(RangeEdges, InvalidPixelsMakeNoEdges) {
         if (u.uniform() < 0.1 || (r > 20 && r < 30 && c > 100 && c < 140))
           s.image.range(r, c) = kNaN;
     if (noise) addNoise(s.image, 301);
-    const long d = detectRangeEdges(s.image).cast<long>().sum();
+    const long d = (detectRangeEdges(s.image).array() != 0).cast<long>().sum();
     EXPECT_LT(double(d) / s.image.validCount(), noise ? kNoiseFalseEdgeBound : 1e-12);
   }
   Rendered s = render(ledgeScene(9, 0.0, -0.4), View{});
