@@ -466,14 +466,13 @@ double LocusMapper::hermiteRoot(double phi_a, double y0, double g0, double phi_b
 // plus its extension's noise — so that the visible top of a lip is kept out of the shadow; the
 // far one half a scanline, to the middle of the gap, where the edge's shadow ends on it on
 // average. A mixed pixel (its footprint straddled the edge: a range between the two surfaces,
-// footprints one scanline wide) says the edge is inside its footprint, at most 1.5 scanlines past
+// footprints one scanline wide) says the edge is inside its footprint, about 1.5 scanlines past
 // the near surface's last clean sample, and its range says where: the fraction of the footprint on
 // the near surface, read as a disk's, bounds how far the near surface reaches (with the emulator's
 // cubature error and the fraction's noise; where that bound is the whole footprint, the next
-// footprint, read as the far surface's within the same error, bounds it: short of 2 scanlines)
-// and places the far surface's end. A line that meets
-// either extension is unseen (maybe on that surface, visible but not sampled); every other line
-// there is in the shadow.
+// footprint, read as the far surface's within the same error, bounds it, short of 2 scanlines)
+// and places the far surface's end. A line that meets either extension is unseen (maybe on that
+// surface, visible but not sampled); every other line there is in the shadow.
 double LocusMapper::rangeAt(int r, const Sample& s) const {
   if (r < 0 || r >= rows_) return kNaN;
   return (1 - s.fc) * double(image_.range(r, s.c0)) + s.fc * double(image_.range(r, s.c0 + 1));

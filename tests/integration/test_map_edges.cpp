@@ -34,6 +34,13 @@ using Scene = test::SimWorld;
 
 std::unique_ptr<Scene> mjcfScene(const std::string& xml) { return std::make_unique<test::MjcfWorld>(xml); }
 
+// A drop-off whose lip is a box's edge on a plane: the high side is x > x_lip, drop_m above.
+std::unique_ptr<Scene> boxLipScene(double drop_m, double x_lip = 0.0) {
+  return mjcfScene("<mujoco><worldbody><geom type=\"plane\" size=\"40 40 0.1\"/><geom type=\"box\" pos=\"" +
+                   std::to_string(x_lip + 15) + " 0 " + std::to_string(drop_m / 2) + "\" size=\"15 20 " +
+                   std::to_string(drop_m / 2) + "\"/></worldbody></mujoco>");
+}
+
 std::unique_ptr<Scene> dropScene(double drop_m) {
   terrains::TerrainSpec t;
   t.kind = terrains::TerrainKind::Steps;
@@ -175,9 +182,7 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
 TEST(MapEdges, BoxEdgeLipTopsStayOutOfTheShadowWithTheErim) {
   long in_shadow = 0, lip_top = 0;
   for (const double drop : {0.2, 0.45, 0.6}) {
-    const auto scene = mjcfScene("<mujoco><worldbody><geom type=\"plane\" size=\"40 40 0.1\"/><geom type=\"box\" pos=\"15 0 " +
-                                 std::to_string(drop / 2) + "\" size=\"15 20 " + std::to_string(drop / 2) +
-                                 "\"/></worldbody></mujoco>");
+    const auto scene = boxLipScene(drop);
     for (const double h : {2.0, 4.0})
       for (const double d : {4.0, 6.5, 10.0})
         for (const double angle_deg : {0.0, 30.0})
@@ -217,11 +222,6 @@ TEST(MapEdges, BoxEdgeLipTopsStayOutOfTheShadowWithTheErim) {
 // else), this map keeps the far lip's top out of the shadow too, and its recall is the bound
 // wherever a cell is contested: it gives away nothing the image does not force.
 TEST(MapEdges, NoMapPlacesALipInsideItsScanlineGap) {
-  const auto lipScene = [](double drop_m, double x_lip) {  // the high side is x > x_lip
-    return mjcfScene("<mujoco><worldbody><geom type=\"plane\" size=\"40 40 0.1\"/><geom type=\"box\" pos=\"" +
-                     std::to_string(x_lip + 15) + " 0 " + std::to_string(drop_m / 2) + "\" size=\"15 20 " +
-                     std::to_string(drop_m / 2) + "\"/></worldbody></mujoco>");
-  };
   const auto sameBits = [](const perception::Raster<float>& a, const perception::Raster<float>& b) {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(float) * std::size_t(a.size())) == 0;
   };
@@ -238,19 +238,19 @@ TEST(MapEdges, NoMapPlacesALipInsideItsScanlineGap) {
         map.x_m = {-8, d};
         map.y_m = {-5, 5};
         const auto image = [&](const Scene& s) { return sim::ErimScanner(*s.scene, sensor).scan(T_WS, 11).image.range; };
-        const auto near_scene = lipScene(drop, 0.0);
+        const auto near_scene = boxLipScene(drop, 0.0);
         const perception::Raster<float> near_image = image(*near_scene);
         // The farthest lip, on a 1 cm grid, whose image is still the near lip's, bit for bit
         // (bisection: a lip that can move δ unseen can move less).
         int lo = 0, hi = 128;  // cm: lo gives the same image, hi is not known to
         while (hi - lo > 1) {
           const int mid = (lo + hi) / 2;
-          (sameBits(image(*lipScene(drop, -0.01 * mid)), near_image) ? lo : hi) = mid;
+          (sameBits(image(*boxLipScene(drop, -0.01 * mid)), near_image) ? lo : hi) = mid;
         }
         const std::string what =
             "drop " + std::to_string(drop) + " h " + std::to_string(h) + " d " + std::to_string(d);
         const Mapped near = mapView(*near_scene, sensor, view, map, 11);
-        const Mapped far = mapView(*lipScene(drop, -0.01 * lo), sensor, view, map, 11);
+        const Mapped far = mapView(*boxLipScene(drop, -0.01 * lo), sensor, view, map, 11);
         ASSERT_TRUE(sameBits(far.build.map.elevation(), near.build.map.elevation())) << what;
         ASSERT_TRUE(far.build.map.state() == near.build.map.state()) << what;
         // The far lip's visible top that is hidden behind the near lip; and its top in the shadow.
