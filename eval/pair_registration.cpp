@@ -18,9 +18,17 @@ PairRegistration::PairRegistration(const perception::ScanMap& view_i, const Eige
   if (std::any_of(methods.begin(), methods.end(), [](MatchMethod m) { return paperMethod(m).has_value(); }))
     map_i_ = perception::LocusMapper(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus, i_.map.grid().T_WM)
                  .map(i_.map.grid());
-  // The mapper map I was made with: the pixels of image I that map I's lines share.
-  if (std::find(methods.begin(), methods.end(), MatchMethod::IconicWeighted) != methods.end())
-    source_i_.emplace(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus);
+  // The weighted method's σ_z has the footprint's term: the two views smooth the terrain over
+  // footprints of different size and shape, so between their maps that error is noise. Its map I,
+  // and the mapper map I was made with (the pixels of image I that map I's lines share).
+  if (std::find(methods.begin(), methods.end(), MatchMethod::IconicWeighted) != methods.end()) {
+    weighted_config_ = config_;
+    weighted_config_.locus.footprint_sigma = true;
+    const perception::Raster<std::uint8_t>* edges = i_.edges ? &*i_.edges : nullptr;
+    weighted_map_i_ = perception::LocusMapper(i_.image, edges, weighted_config_.locus, i_.map.grid().T_WM)
+                          .map(i_.map.grid());
+    source_i_.emplace(i_.image, edges, weighted_config_.locus);
+  }
   if (std::any_of(methods.begin(), methods.end(), [](MatchMethod m) { return !paperMethod(m); }))
     returns_i_ = peers::returns(i_.image);
 }
@@ -63,7 +71,9 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
   image.T_WS = out.believed_WS;
   const perception::MapGrid grid_j = perception::believedGrid(map_i_.grid(), T_WS_i_, out.believed_WS);
   Stopwatch t;
-  out.reg = perception::registerViews(map_i_, image, j_.edges ? &*j_.edges : nullptr, grid_j, *paper, config_,
+  const bool weighted = method == MatchMethod::IconicWeighted;
+  out.reg = perception::registerViews(weighted ? *weighted_map_i_ : map_i_, image, j_.edges ? &*j_.edges : nullptr,
+                                      grid_j, *paper, weighted ? weighted_config_ : config_,
                                       source_i_ ? &*source_i_ : nullptr);
   out.seconds = t.seconds();
   out.T_est = T_WS_i_.inverse() * perception::poseFromVector(out.reg.nu).inverse() * out.believed_WS;
