@@ -187,25 +187,26 @@ TEST(MapEdges, BoxEdgeLipTopsStayOutOfTheShadowWithTheErim) {
       for (const double d : {4.0, 6.5, 10.0})
         for (const double angle_deg : {0.0, 30.0})
           for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-          ViewSpec view;
-          view.xyz_m = {d, 0, h + drop};
-          view.rpy_rad = {0, -std::atan(h / (d + 1.0)), (90.0 + angle_deg) * kDeg};
-          MapSpec map;
-          map.x_m = {-8, d};
-          map.y_m = {-5, 5};
-          const Mapped m = mapView(*scene, perception::SensorModel{}, view, map, seed);
-          for (int r = 0; r < m.grid.rows; ++r)
-            for (int c = 0; c < m.grid.cols; ++c) {
-              if (m.vis(r, c) != std::uint8_t(sim::Visibility::Visible) || !(m.grid.center(r, c).x() > 0)) continue;
-              lip_top += m.grid.center(r, c).x() < 0.1;
-              const bool shadow = m.build.map.state()(r, c) == std::uint8_t(perception::CellState::Shadow);
-              in_shadow += shadow;
-              EXPECT_FALSE(shadow) << "drop " << drop << " h " << h << " d " << d << " at " << angle_deg << " deg, seed " << seed
-                                   << ": lip top at y " << m.grid.center(r, c).y();
-            }
-        }
+            ViewSpec view;
+            view.xyz_m = {d, 0, h + drop};
+            view.rpy_rad = {0, -std::atan(h / (d + 1.0)), (90.0 + angle_deg) * kDeg};
+            MapSpec map;
+            map.x_m = {-8, d};
+            map.y_m = {-5, 5};
+            const Mapped m = mapView(*scene, perception::SensorModel{}, view, map, seed);
+            for (int r = 0; r < m.grid.rows; ++r)
+              for (int c = 0; c < m.grid.cols; ++c) {
+                if (m.vis(r, c) != std::uint8_t(sim::Visibility::Visible) || !(m.grid.center(r, c).x() > 0)) continue;
+                lip_top += m.grid.center(r, c).x() < 0.1;
+                const bool shadow = m.build.map.state()(r, c) == std::uint8_t(perception::CellState::Shadow);
+                in_shadow += shadow;
+                EXPECT_FALSE(shadow) << "drop " << drop << " h " << h << " d " << d << " at " << angle_deg
+                                     << " deg, seed " << seed << ": lip top at y " << m.grid.center(r, c).y();
+              }
+          }
   }
-  std::printf("lip-top cells beside the edge: %ld; visible cells of the high side in the shadow: %ld\n", lip_top, in_shadow);
+  std::printf("lip-top cells beside the edge: %ld; visible cells of the high side in the shadow: %ld\n", lip_top,
+              in_shadow);
   EXPECT_GT(lip_top, 18000);  // every scene has its row of lip-top cells
 }
 
