@@ -690,11 +690,10 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
   const bool across_rows = (row1_edge && row2_edge) || ((e & 3u) && (e & 12u) && jump_rows >= jump_cols) ||
                            (row1_edge != row2_edge && linkedMixedPixel(r1, r2, s1, s2));
   const bool beside_cols = (e & 5u) && (e & 10u) && jump_cols > jump_rows;
-  unsigned e_cols = 0;  // the cell's edge pixels with a break across columns (or no direction)
-  for (int k = 0; k < 4 && beside_cols; ++k) {
-    const unsigned bits = (e >> k & 1u) ? (*edges_)(near.r0 + k / 2, near.c0 + k % 2) : 0u;
-    if ((bits & kEdgeAcrossCols) || (bits && !(bits & kEdgeAcrossRows))) e_cols |= 1u << k;
-  }
+  unsigned e_cols = 0;  // the cell's edge pixels with a break across columns
+  for (int k = 0; k < 4 && beside_cols; ++k)
+    if ((e >> k & 1u) && edgeBreaksAcross((*edges_)(near.r0 + k / 2, near.c0 + k % 2), kEdgeAcrossCols))
+      e_cols |= 1u << k;
   const bool across_cols = beside_cols && (e_cols & 5u) && (e_cols & 10u);
   if (across_rows && meetsSurfaceInGap(r1, r2, s1, s2)) {
     hit.state = CellState::Unseen;  // maybe on a surface past its last sample

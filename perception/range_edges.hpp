@@ -36,6 +36,11 @@ struct GncConfig {
 // below) and across columns (to the pixel left or right). A mask made elsewhere may set
 // kEdgePixel alone, "direction unknown": readers then take both directions.
 constexpr std::uint8_t kEdgePixel = 1, kEdgeAcrossRows = 2, kEdgeAcrossCols = 4;
+// Whether a mask value is an edge pixel with a break across `direction` (kEdgeAcrossRows or
+// kEdgeAcrossCols), a direction-unknown edge pixel counting for both.
+constexpr bool edgeBreaksAcross(std::uint8_t bits, std::uint8_t direction) {
+  return (bits & direction) || (bits && !(bits & (kEdgeAcrossRows | kEdgeAcrossCols)));
+}
 
 // The edges of `image`: non-zero where a pixel touches a depth discontinuity (kEdgePixel and its
 // direction bits), else 0. NaN or non-positive pixels carry no data: their links neither smooth

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -13,6 +14,7 @@
 #include <memory>
 #include <numbers>
 #include <string>
+#include <utility>
 
 #include "eval/map_metrics.hpp"
 #include "perception/scan_to_map.hpp"
@@ -75,6 +77,26 @@ Mapped mapView(const Scene& s, const perception::SensorModel& sensor, const View
   return m;
 }
 
+// The range of drop-offs: drops (m), sensor heights above the high side (m), lip
+// distances (m), and the lip square to the view or turned (degrees).
+constexpr std::array kDrops{0.2, 0.45, 0.6};
+constexpr std::array kHeights{2.0, 4.0};
+constexpr std::array kDistances{4.0, 6.5, 10.0};
+constexpr std::array kLipAngles{0.0, 30.0};
+
+// A drop-off of the range seen from its high side: the sensor h above the high side at
+// x = d, looking towards −x across the lip at x = 0 (turned angle_deg from square to it), and the
+// map from 8 m past the lip back to the sensor.
+std::pair<ViewSpec, MapSpec> dropOffView(double drop, double h, double d, double angle_deg) {
+  ViewSpec view;
+  view.xyz_m = {d, 0, h + drop};
+  view.rpy_rad = {0, -std::atan(h / (d + 1.0)), (90.0 + angle_deg) * kDeg};
+  MapSpec map;
+  map.x_m = {-8, d};
+  map.y_m = {-5, 5};
+  return {view, map};
+}
+
 perception::SensorModel noiseFree() {
   perception::SensorModel s;
   s.noise_k = 0, s.quantization_m = 0, s.mixed_pixels = false;
@@ -100,18 +122,13 @@ perception::SensorModel noiseFree() {
 // has the rest and what is left).
 TEST(MapEdges, DropOffSeenFromItsHighSide) {
   int checked_pr = 0, checked_erim = 0;
-  for (const double drop : {0.2, 0.45, 0.6}) {
+  for (const double drop : kDrops) {
     const auto scene = dropScene(drop);
-    for (const double h : {2.0, 4.0})
-      for (const double d : {4.0, 6.5, 10.0})
-        for (const double angle_deg : {0.0, 30.0})
+    for (const double h : kHeights)
+      for (const double d : kDistances)
+        for (const double angle_deg : kLipAngles)
           for (const bool ideal : {true, false}) {
-            ViewSpec view;  // on the high side at x = d, looking towards −x across the lip at x = 0
-            view.xyz_m = {d, 0, h + drop};
-            view.rpy_rad = {0, -std::atan(h / (d + 1.0)), (90.0 + angle_deg) * kDeg};
-            MapSpec map;
-            map.x_m = {-8, d};
-            map.y_m = {-5, 5};
+            const auto [view, map] = dropOffView(drop, h, d, angle_deg);
             const perception::SensorModel sensor = ideal ? noiseFree() : perception::SensorModel{};
             const Mapped m = mapView(*scene, sensor, view, map, 11);
             const auto& state = m.build.map.state();
@@ -181,18 +198,13 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
 // pixels, a two-count column jump beside them made 8 cells shadow, from 6.5 m).
 TEST(MapEdges, BoxEdgeLipTopsStayOutOfTheShadowWithTheErim) {
   long in_shadow = 0, lip_top = 0;
-  for (const double drop : {0.2, 0.45, 0.6}) {
+  for (const double drop : kDrops) {
     const auto scene = boxLipScene(drop);
-    for (const double h : {2.0, 4.0})
-      for (const double d : {4.0, 6.5, 10.0})
-        for (const double angle_deg : {0.0, 30.0})
+    for (const double h : kHeights)
+      for (const double d : kDistances)
+        for (const double angle_deg : kLipAngles)
           for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-            ViewSpec view;
-            view.xyz_m = {d, 0, h + drop};
-            view.rpy_rad = {0, -std::atan(h / (d + 1.0)), (90.0 + angle_deg) * kDeg};
-            MapSpec map;
-            map.x_m = {-8, d};
-            map.y_m = {-5, 5};
+            const auto [view, map] = dropOffView(drop, h, d, angle_deg);
             const Mapped m = mapView(*scene, perception::SensorModel{}, view, map, seed);
             for (int r = 0; r < m.grid.rows; ++r)
               for (int c = 0; c < m.grid.cols; ++c) {
@@ -228,16 +240,11 @@ TEST(MapEdges, NoMapPlacesALipInsideItsScanlineGap) {
   };
   const perception::SensorModel sensor = noiseFree();
   int below = 0;
-  for (const double drop : {0.2, 0.45, 0.6})
-    for (const double h : {2.0, 4.0})
-      for (const double d : {4.0, 6.5, 10.0}) {
-        ViewSpec view;
-        view.xyz_m = {d, 0, h + drop};
-        view.rpy_rad = {0, -std::atan(h / (d + 1.0)), 90.0 * kDeg};
+  for (const double drop : kDrops)
+    for (const double h : kHeights)
+      for (const double d : kDistances) {
+        const auto [view, map] = dropOffView(drop, h, d, 0.0);
         const Eigen::Isometry3d T_WS = perception::sensorPose(view.xyz_m, view.rpy_rad);
-        MapSpec map;
-        map.x_m = {-8, d};
-        map.y_m = {-5, 5};
         const auto image = [&](const Scene& s) { return sim::ErimScanner(*s.scene, sensor).scan(T_WS, 11).image.range; };
         const auto near_scene = boxLipScene(drop, 0.0);
         const perception::Raster<float> near_image = image(*near_scene);
