@@ -38,7 +38,8 @@ using sweep_detail::csvLine;
 
 constexpr std::uint64_t kBasinStream = 7001;  // the trials' directions: independent of terrain and noise
 const std::vector<std::string> kHeader{"method", "translation_m", "rotation_deg", "trial", "translation_error_m",
-                                       "rotation_error_deg", "success", "iterations", "time_s"};
+                                       "rotation_error_deg", "success", "iterations", "time_s",
+                                       "accepted", "false_accept"};
 
 using sweep_detail::numberText;
 
@@ -326,6 +327,10 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   // The rover's prior covers every error the grid tries.
   config.prior_translation_m = std::max(config.prior_translation_m, g.translation_m.back());
   config.prior_rotation_deg = std::max(config.prior_rotation_deg, g.rotation_deg.back());
+  // A basin keeps its declared prior: the verdict gates by it, taken as three σ, whatever the
+  // scenario's odometry model says of the views' distance.
+  config.odometry.reset();
+  config.acceptance.prior = {config.prior_translation_m / 3, config.prior_rotation_deg / 3};
   const ViewState& vi = s.views[std::size_t(pi)];
   const ViewState& vj = s.views[std::size_t(pj)];
   const PairRegistration pair(*vi.locus, vi.T_WS, *vj.locus, vj.T_WS, config, spec.methods);
@@ -360,11 +365,13 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
                           res.error.rotation_deg <= spec.success_rotation_deg;
           row.insert(row.end(), {numberText(res.error.translation_m), numberText(res.error.rotation_deg),
                                  ok ? "true" : "false", std::to_string(res.reg.iterations),
-                                 opt.timing ? numberText(res.seconds) : ""});
+                                 opt.timing ? numberText(res.seconds) : "",
+                                 res.reg.assessment.accepted ? "true" : "false",
+                                 res.reg.assessment.accepted && !ok ? "true" : "false"});
           verdicts += std::string(" ") + matchMethodName(m) + (ok ? " ok" : " FAILED");
         } catch (const std::invalid_argument& e) {
           // A method that gives up (no overlap left, too few points) has not converged.
-          row.insert(row.end(), {"", "", "false", "0", ""});
+          row.insert(row.end(), {"", "", "false", "0", "", "false", "false"});
           verdicts += std::string(" ") + matchMethodName(m) + " GAVE UP";
           const std::lock_guard lock(mutex);
           if (first_failure.empty()) first_failure = matchMethodName(m) + std::string(": ") + e.what();

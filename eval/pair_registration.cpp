@@ -15,9 +15,9 @@ PairRegistration::PairRegistration(const perception::ScanMap& view_i, const Eige
     : i_(view_i), j_(view_j), T_WS_i_(T_WS_i), T_IJ_(T_WS_i.inverse() * T_WS_j), config_(std::move(config)) {
   // Map I as registration maps it for the paper's methods (config.locus: the samples at edges
   // trusted, as for map J), on the grid of the run's map I.
-  if (std::any_of(methods.begin(), methods.end(), [](MatchMethod m) { return paperMethod(m).has_value(); }))
-    map_i_ = perception::LocusMapper(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus, i_.map.grid().T_WM)
-                 .map(i_.map.grid());
+  // Every method's result is assessed on it, the peers' too.
+  map_i_ = perception::LocusMapper(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus, i_.map.grid().T_WM)
+               .map(i_.map.grid());
   // The weighted method's σ_z has the footprint's term: the two views smooth the terrain over
   // footprints of different size and shape, so between their maps that error is noise. Its map I,
   // and the mapper map I was made with (the pixels of image I that map I's lines share).
@@ -64,6 +64,10 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
     out.reg.iterations = r.iterations;
     out.T_est = T_WS_i_.inverse() * r.T * out.believed_WS;
     out.error = perception::poseError(T_IJ_, out.T_est);
+    // The rover's verdict on the peer's estimate, by the same tests as the paper's methods'.
+    const perception::LocusMapper mapper(image, j_.edges ? &*j_.edges : nullptr, config_.locus);
+    out.reg.assessment = perception::assessRegistration(map_i_, mapper, out.reg.nu, out.believed_WS, nullptr, nullptr,
+                                                        perception::acceptanceFor(config_, T_0));
     return out;
   }
   // Image J as the rover has it: unwrapped, its edges, at the believed pose.
@@ -72,9 +76,10 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
   const perception::MapGrid grid_j = perception::believedGrid(map_i_.grid(), T_WS_i_, out.believed_WS);
   Stopwatch t;
   const bool weighted = method == MatchMethod::IconicWeighted;
+  perception::RegistrationConfig config = weighted ? weighted_config_ : config_;
+  config.acceptance = perception::acceptanceFor(config, T_0);  // this pair's prior
   out.reg = perception::registerViews(weighted ? *weighted_map_i_ : map_i_, image, j_.edges ? &*j_.edges : nullptr,
-                                      grid_j, *paper, weighted ? weighted_config_ : config_,
-                                      source_i_ ? &*source_i_ : nullptr);
+                                      grid_j, *paper, config, source_i_ ? &*source_i_ : nullptr);
   out.seconds = t.seconds();
   out.T_est = T_WS_i_.inverse() * perception::poseFromVector(out.reg.nu).inverse() * out.believed_WS;
   out.error = perception::poseError(T_IJ_, out.T_est);

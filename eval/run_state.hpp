@@ -50,6 +50,10 @@ struct PairEstimate {
   Eigen::Isometry3d T_IJ = Eigen::Isometry3d::Identity();  // sensor J in sensor I's frame, estimated
   perception::PoseVector nu = perception::PoseVector::Zero();  // the correction (registerViews' ν)
   std::optional<perception::Matrix6d> covariance;             // of ν, when the method gives one
+  bool covariance_calibrated = false;                          // covarianceCalibrated(method)
+  bool accepted = true;                                        // the rover's verdict (perception::Assessment)
+  Eigen::Isometry3d T_WS_i = Eigen::Isometry3d::Identity();    // view I as registration had it
+  Eigen::Isometry3d believed_WS_j = Eigen::Isometry3d::Identity();  // view J believed, in that frame
 };
 
 // One footfall method's choice (footfall stage), for the leg after it.

@@ -315,7 +315,7 @@ MapSpec readMap(const Reader& reader, const YAML::Node& node) {
 }
 
 MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int views) {
-  const Fields f(reader, node, "matching", {"pairs", "methods", "initial_error", "success", "prior"});
+  const Fields f(reader, node, "matching", {"pairs", "methods", "initial_error", "success", "prior", "odometry", "gate"});
   MatchingSpec m;
   if (views < 2) reader.fail("matching", "needs at least two views, the scenario has " + std::to_string(views));
   if (const auto p = f.get("pairs")) {
@@ -367,6 +367,16 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
     m.prior_translation_m = fp.number("translation_m", kPositive, m.prior_translation_m);
     m.prior_rotation_deg = fp.number("rotation_deg", {0.0, 180.0, true, false}, m.prior_rotation_deg);
   }
+  if (const auto o = f.get("odometry")) {
+    const Fields fo(reader, *o, "matching.odometry",
+                    {"translation_per_m", "translation_floor_m", "heading_deg_per_m", "heading_floor_deg"});
+    perception::OdometryModel& om = m.odometry;
+    om.translation_per_m = fo.number("translation_per_m", {0.0, 10.0, false, false}, om.translation_per_m);
+    om.translation_floor_m = fo.number("translation_floor_m", kPositive, om.translation_floor_m);
+    om.heading_deg_per_m = fo.number("heading_deg_per_m", {0.0, 90.0, false, false}, om.heading_deg_per_m);
+    om.heading_floor_deg = fo.number("heading_floor_deg", {0.0, 90.0, true, false}, om.heading_floor_deg);
+  }
+  m.gate_by_prior = f.choice("gate", {"odometry", "prior"}, "odometry") == "prior";
   return m;
 }
 
@@ -561,6 +571,8 @@ perception::LocusConfig locusConfig(const Scenario& sc) {
   return c;
 }
 
+bool covarianceCalibrated(MatchMethod m) { return m == MatchMethod::IconicWeighted; }
+
 perception::RegistrationConfig registrationConfig(const Scenario& sc) {
   perception::RegistrationConfig c;
   c.locus = locusConfig(sc);
@@ -569,6 +581,10 @@ perception::RegistrationConfig registrationConfig(const Scenario& sc) {
   const MatchingSpec& m = sc.matching ? *sc.matching : defaults;
   c.prior_translation_m = m.prior_translation_m;
   c.prior_rotation_deg = m.prior_rotation_deg;
+  if (m.gate_by_prior)
+    c.acceptance.prior = {m.prior_translation_m / 3, m.prior_rotation_deg / 3};
+  else
+    c.odometry = m.odometry;
   return c;
 }
 

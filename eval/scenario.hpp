@@ -69,6 +69,9 @@ std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m);
 // The scenario's name of a method ("features+iconic"; in file names, eval/match_figures.hpp's
 // methodFileName).
 const char* matchMethodName(MatchMethod m);
+// Whether the method's covariance is calibrated (its NEES tested against χ²₆: docs/matching.md,
+// "Calibration"): iconic_weighted's alone. The merge propagates only calibrated covariances.
+bool covarianceCalibrated(MatchMethod m);
 
 struct MatchingSpec {
   std::vector<std::pair<int, int>> pairs;  // (I, J): view J registered against view I
@@ -83,6 +86,11 @@ struct MatchingSpec {
   // acos(9/16) = 55.8°).
   double prior_translation_m = 5.196152422706632;
   double prior_rotation_deg = 55.77113367218742;
+  // The rover's verdict (docs/matching.md, "Verification and acceptance") gates the correction by
+  // the odometry model at the believed distance between the views (gate odometry), or by the
+  // declared prior taken as three σ (gate prior: every correction within it passes; basins).
+  perception::OdometryModel odometry;
+  bool gate_by_prior = false;
 
   // What the rover believes of sensor J's pose in sensor I's frame, given the truth T_IJ:
   // T_0 = T_IJ·E.

@@ -183,6 +183,11 @@ std::string resolvedYaml(const Scenario& s) {
     y += "  success: {translation_m: " + num(m.success_translation_m) + ", rotation_deg: " +
          num(m.success_rotation_deg) + "}\n";
     y += "  prior: {translation_m: " + num(m.prior_translation_m) + ", rotation_deg: " + num(m.prior_rotation_deg) + "}\n";
+    const perception::OdometryModel& o = m.odometry;
+    y += "  odometry: {translation_per_m: " + num(o.translation_per_m) + ", translation_floor_m: " +
+         num(o.translation_floor_m) + ", heading_deg_per_m: " + num(o.heading_deg_per_m) +
+         ", heading_floor_deg: " + num(o.heading_floor_deg) + "}\n";
+    y += std::string("  gate: ") + (m.gate_by_prior ? "prior" : "odometry") + "\n";
   }
   if (s.merge) {
     const auto& m = *s.merge;

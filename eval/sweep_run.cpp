@@ -5,6 +5,7 @@
 #include "eval/sweep.hpp"
 
 #include <algorithm>
+#include <string_view>
 #include <atomic>
 #include <charconv>
 #include <cmath>
@@ -35,6 +36,15 @@ using Row = std::vector<std::pair<std::string, std::string>>;  // column, cell t
 // measured times (timing_s, and time_s of each registration) only with `timing`: they are the
 // figures that are not reproducible.
 void flatten(const nlohmann::ordered_json& j, const std::string& path, bool timing, Row& out) {
+  // A registration's reject_reasons (a list of texts, empty when accepted) is one cell, "; "
+  // between them, so that every run has the same columns.
+  const std::string_view reasons = ".reject_reasons";
+  if (j.is_array() && path.size() >= reasons.size() && path.compare(path.size() - reasons.size(), reasons.size(), reasons) == 0) {
+    std::string text;
+    for (const auto& e : j) text += (text.empty() ? "" : "; ") + e.get<std::string>();
+    out.emplace_back(path, std::move(text));
+    return;
+  }
   if (j.is_object() || j.is_array()) {
     std::size_t i = 0;
     for (auto it = j.begin(); it != j.end(); ++it, ++i) {

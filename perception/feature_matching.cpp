@@ -15,7 +15,7 @@ void checkConfig(const FeatureMatchConfig& c) {
   const bool ok = c.max_rotation_deg > 0 && c.max_rotation_deg <= 180 && c.max_shift_m > 0 && c.strength_ratio >= 0 &&
                   c.strength_ratio <= 1 && c.length_ratio >= 0 && c.length_ratio <= 1 && c.length_slack_m >= 0 &&
                   c.tolerance_m > 0 && c.search_features >= 1 && c.pairs_per_hypothesis >= 2 &&
-                  c.min_spread_m >= 0 && c.max_nodes >= 1 && c.d_max_m > 0 && c.inlier_m > 0 && c.refits >= 0;
+                  c.min_spread_m >= 0 && c.max_nodes >= 1 && c.d_max_m > 0 && c.inlier_m > 0 && c.refits >= 0 && c.keep_ranked >= 0;
   if (!ok) throw std::invalid_argument("FeatureMatchConfig: a value is out of range");
 }
 
@@ -187,6 +187,30 @@ FeatureMatch matchFeatures(const std::vector<Feature>& features1, const std::vec
     return std::acos(std::clamp(((T0.linear().transpose() * T.linear()).trace() - 1) / 2, -1.0, 1.0));
   };
 
+  // Two transforms are one hypothesis when no feature of map 1 lands inlier_m apart under them.
+  const auto sameHypothesis = [&](const Eigen::Isometry3d& A, const Eigen::Isometry3d& B) {
+    for (const Feature& f : features1)
+      if ((A * f.position - B * f.position).norm() >= config.inlier_m) return false;
+    return true;
+  };
+  // Keeps `ranked` the keep_ranked distinct pairings of lowest D below T_0's, best first.
+  const auto rank = [&](const Eigen::Isometry3d& T, double D, int inliers) {
+    std::vector<RankedPairing>& ranked = best.ranked;
+    if (!(D < best.D0) || config.keep_ranked <= 0) return;
+    if (int(ranked.size()) == config.keep_ranked && !(D < ranked.back().D)) return;
+    for (std::size_t k = 0; k < ranked.size(); ++k) {
+      if (!sameHypothesis(T, poseFromVector(ranked[k].nu))) continue;
+      if (!(D < ranked[k].D)) return;  // a better form of this hypothesis is kept
+      ranked.erase(ranked.begin() + long(k));
+      break;
+    }
+    RankedPairing entry{vectorFromPose(T), D, inliers};
+    const auto at = std::upper_bound(ranked.begin(), ranked.end(), D,
+                                     [](double d, const RankedPairing& e) { return d < e.D; });
+    ranked.insert(at, entry);
+    if (int(ranked.size()) > config.keep_ranked) ranked.pop_back();
+  };
+
   std::vector<std::pair<int, int>> pairing;
   std::vector<char> used(features2.size(), 0);
   // Verify a full hypothesis: fit, refit on its inliers, score by D.
@@ -208,6 +232,7 @@ FeatureMatch matchFeatures(const std::vector<Feature>& features1, const std::vec
     }
     const double sigma = rotationSigma(T, inliers);
     if (turnedFromT0(T) > max_rotation + 3 * sigma) return;  // turned beyond the prior
+    rank(T, D, int(inliers.size()));
     if (D < best.D) {
       best.found = true;
       best.D = D;

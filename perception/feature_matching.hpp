@@ -39,6 +39,17 @@ struct FeatureMatchConfig {
   double d_max_m = 0.5;
   double inlier_m = 0.3;
   int refits = 3;
+  // The ranked list: the `keep_ranked` distinct pairings of lowest D (their transforms move some
+  // feature of map 1 apart by at least inlier_m), the hypotheses that registration's verification
+  // refines besides T_0 (perception/registration.hpp).
+  int keep_ranked = 3;
+};
+
+// One verified pairing of the search: its transform, D and inliers.
+struct RankedPairing {
+  PoseVector nu = PoseVector::Zero();  // map 1's frame → map 2's
+  double D = 0;                        // eq. 3 (m)
+  int inliers = 0;                     // pairs closer than inlier_m
 };
 
 struct FeatureMatch {
@@ -53,6 +64,8 @@ struct FeatureMatch {
   // σ of T_F's rotation from its inliers' residuals (the prior admits T_F turned up to
   // max_rotation_deg + 3·rotation_sigma_deg from T_0: docs/matching.md); 0 when not found.
   double rotation_sigma_deg = 0;
+  // The distinct pairings of lowest D that beat T_0's, best first (the first is T_F when found).
+  std::vector<RankedPairing> ranked;
 };
 
 // The distance d of eq. 3 between feature a and feature b (same frame, same type): points and

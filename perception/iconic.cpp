@@ -300,6 +300,15 @@ IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, con
   return sumLines(sampleLines(map1, image2, nu, with_gradient, reference_normals, stride, weighted), cauchy_c);
 }
 
+std::vector<double> normalizedResiduals(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu) {
+  const MapGrid& g = map1.grid();
+  std::vector<double> u(std::size_t(g.cells()), std::numeric_limits<double>::quiet_NaN());
+  const LineSamples lines = sampleLines(map1, image2, nu, false, nullptr, 1, true);
+  for (int r = 0; r < g.rows; ++r)
+    for (const LineSample& l : lines.rows[std::size_t(r)]) u[std::size_t(r) * g.cols + l.col] = l.u;
+  return u;
+}
+
 IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                    const IconicOptions& options) {
   IconicResult res;
@@ -310,7 +319,11 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
   const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
   // The lines of the current estimate: E at a narrower loss is summed from them again, not searched.
   std::vector<int> hints(std::size_t(map1.grid().cells()), -1);  // each line's last bracket
-  const auto sample = [&](const PoseVector& nu) { return sampleLines(map1, image2, nu, true, &normals, 1, false, &hints); };
+  // One level, on the lines of the finest stride given (1 by default).
+  const int stride = options.strides.empty() ? 1 : std::max(1, options.strides.back());
+  const auto sample = [&](const PoseVector& nu) {
+    return sampleLines(map1, image2, nu, true, &normals, stride, false, &hints);
+  };
   LineSamples lines = sample(res.nu);
   IconicError e = sumLines(lines, 0.0);
   record(res, e);

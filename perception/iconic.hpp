@@ -50,6 +50,11 @@ IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, con
                         const std::vector<Eigen::Vector3d>* reference_normals = nullptr, int stride = 1,
                         bool weighted = false);
 
+// Each line's normalized residual u = r/σ at ν, σ² = σ₁² + σ₂² (iconicError's weighted form), per
+// cell of map 1 in row-major order; NaN where the cell or the line's crossing with image 2 is not
+// Known. What verification and acceptance read (perception/acceptance.hpp). Deterministic.
+std::vector<double> normalizedResiduals(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu);
+
 // Map 1's unit surface normals (row-major per cell; NaN where the cell or its neighbours are not
 // known, and there image 2's normal at the hit is used): from central differences of the known
 // elevations two cells either side (one where two are not known).
@@ -106,7 +111,8 @@ Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio = 1e-4)
 // scale 1/(AᵀHA)_ii, H = JᵀJ (rotations and translations have different units; the paper leaves k
 // to the user). k is halved until the cost (over the lines both poses have) decreases and grown
 // again after each success, until the decrease is below min_relative_decrease (at the loss's
-// narrowest scale) or the RMS below floor_m. As LM: map 1's normals in the gradient, the annealed Cauchy loss; one level.
+// narrowest scale) or the RMS below floor_m. As LM: map 1's normals in the gradient, the annealed Cauchy loss; one level,
+// the lines of options.strides' last stride.
 IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                    const IconicOptions& options = {});
 

@@ -3,8 +3,19 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace ambler::perception {
+
+bool twoStage(RegistrationMethod method) {
+  return method == RegistrationMethod::FeaturesIconic || method == RegistrationMethod::FeaturesLm;
+}
+
+AcceptanceConfig acceptanceFor(const RegistrationConfig& config, const Eigen::Isometry3d& T_0) {
+  AcceptanceConfig a = config.acceptance;
+  if (config.odometry) a.prior = config.odometry->at(T_0.translation().norm());
+  return a;
+}
 
 MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, const Eigen::Isometry3d& believed_WS_j) {
   const Eigen::Isometry3d T = believed_WS_j * T_WS_i.inverse() * grid_i.T_WM;
@@ -22,8 +33,7 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
   RegistrationResult out;
   const LocusMapper mapper(image_j, edges_j, config.locus);
   PoseVector nu0 = PoseVector::Zero();  // the rover trusts its belief
-  if (method == RegistrationMethod::Features || method == RegistrationMethod::FeaturesIconic ||
-      method == RegistrationMethod::FeaturesLm) {
+  if (method == RegistrationMethod::Features || twoStage(method)) {
     // Map J as the rover has it: in the believed world, on grid_j (in its own frame M_J).
     const LocusMapper mapper_j(image_j, edges_j, config.locus, grid_j.T_WM);
     out.map_j = mapper_j.map(grid_j);
@@ -42,29 +52,73 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
                                       vectorFromPose(grid_j.T_WM.inverse()), match);
     nu0 = vectorFromPose(grid_j.T_WM * poseFromVector(out.feature_match->nu));
   }
-  out.nu = nu0;
-  if (method == RegistrationMethod::Features) return out;
+  const Eigen::Isometry3d& believed = image_j.T_WS;
+  if (method == RegistrationMethod::Features) {
+    out.nu = nu0;
+    out.assessment = assessRegistration(map_i, mapper, out.nu, believed, nullptr, nullptr, config.acceptance);
+    return out;
+  }
   out.ran_iconic = true;
-  switch (method) {
-    case RegistrationMethod::Iconic:
-    case RegistrationMethod::FeaturesIconic:
-      out.iconic = iconicGradientDescent(map_i, mapper, nu0, config.iconic);
-      break;
-    case RegistrationMethod::IconicLm:
-    case RegistrationMethod::FeaturesLm:
-      out.iconic = iconicLevenbergMarquardt(map_i, mapper, nu0, config.iconic);
-      break;
-    case RegistrationMethod::IconicWeighted: {
-      IconicOptions options = config.iconic;
-      options.map1_source = map_i_source;
-      out.iconic = iconicWeighted(map_i, mapper, nu0, options);
-      break;
+  const auto refine = [&](const PoseVector& start, const IconicOptions& options) {
+    switch (method) {
+      case RegistrationMethod::Iconic:
+      case RegistrationMethod::FeaturesIconic:
+        return iconicGradientDescent(map_i, mapper, start, options);
+      case RegistrationMethod::IconicWeighted: {
+        IconicOptions weighted = options;
+        weighted.map1_source = map_i_source;
+        return iconicWeighted(map_i, mapper, start, weighted);
+      }
+      default:
+        return iconicLevenbergMarquardt(map_i, mapper, start, options);
     }
-    case RegistrationMethod::Features:
-      break;
+  };
+  const FeatureMatch* fm = out.feature_match ? &*out.feature_match : nullptr;
+  if (!twoStage(method) || !fm->found) {
+    out.iconic = refine(nu0, config.iconic);
+  } else {
+    // Verification (docs/matching.md): feature matching's distinct pairings (T_F, then the next
+    // best) are screened by the iconic method on the coarse lines alone, the best of them by the
+    // robust cost over the lines all have is refined in full, T_0 is refined in full, and of the
+    // two the lower cost over their common lines is kept (T_F's on a tie, as the paper's).
+    const auto inBelieved = [&](const PoseVector& nu_f) { return vectorFromPose(grid_j.T_WM * poseFromVector(nu_f)); };
+    std::vector<RegistrationHypothesis>& hs = out.hypotheses;
+    IconicOptions coarse = config.iconic;
+    coarse.strides = {config.screen_stride};
+    std::vector<std::vector<double>> residuals;
+    for (std::size_t k = 0; k < fm->ranked.size(); ++k) {
+      const std::string name = k == 0 ? "T_F" : "pairing " + std::to_string(k + 1);
+      RegistrationHypothesis h{name, "screen", inBelieved(fm->ranked[k].nu), {}, fm->ranked[k].D, 0, 0};
+      const IconicResult r = refine(h.nu0, coarse);
+      h.nu = r.nu, h.iterations = r.iterations;
+      residuals.push_back(normalizedResiduals(map_i, mapper, h.nu));
+      hs.push_back(h);
+    }
+    long common = 0;
+    std::vector<double> costs = commonOverlapCosts(residuals, config.acceptance.inlier_sigmas, &common);
+    std::size_t best = 0;
+    for (std::size_t k = 0; k < costs.size(); ++k) {
+      hs[k].cost = costs[k];
+      if (costs[k] < costs[best]) best = k;
+    }
+    // The two refined in full: the best pairing (from where its screen ended) and T_0.
+    std::vector<IconicResult> results;
+    results.push_back(refine(hs[best].nu, config.iconic));
+    results.push_back(refine(PoseVector::Zero(), config.iconic));
+    const std::size_t first = hs.size();
+    hs.push_back({hs[best].start, "refine", hs[best].nu, results[0].nu, hs[best].D_m, 0, results[0].iterations});
+    hs.push_back({"T_0", "refine", PoseVector::Zero(), results[1].nu, fm->D0, 0, results[1].iterations});
+    residuals = {normalizedResiduals(map_i, mapper, results[0].nu), normalizedResiduals(map_i, mapper, results[1].nu)};
+    costs = commonOverlapCosts(residuals, config.acceptance.inlier_sigmas, &out.common_lines);
+    hs[first].cost = costs[0], hs[first + 1].cost = costs[1];
+    const std::size_t kept = costs[1] < costs[0] ? 1 : 0;
+    out.chosen = int(first + kept);
+    out.iconic = std::move(results[kept]);
   }
   out.nu = out.iconic.nu;
   out.iterations = out.iconic.iterations;
+  const Degeneracy d{out.iconic.degenerate, out.iconic.free_directions};
+  out.assessment = assessRegistration(map_i, mapper, out.nu, believed, &out.iconic.covariance, &d, config.acceptance);
   return out;
 }
 

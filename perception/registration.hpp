@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "perception/acceptance.hpp"
 #include "perception/feature_matching.hpp"
 #include "perception/features.hpp"
 #include "perception/iconic.hpp"
@@ -22,6 +23,9 @@ enum class RegistrationMethod : std::uint8_t {
   FeaturesLm,      // two stages with our second: Levenberg–Marquardt from T_F
 };
 
+// Whether the method runs feature matching first, then verifies its refined hypotheses.
+bool twoStage(RegistrationMethod method);
+
 struct RegistrationConfig {
   LocusConfig locus;          // how image J is met (its sensor model included)
   FeatureConfig features;     // feature extraction, both maps
@@ -35,6 +39,30 @@ struct RegistrationConfig {
   double prior_translation_m = 5.2;
   double prior_rotation_deg = 30;
   IconicOptions iconic;
+  // The verdict's thresholds and the prior's σ it gates the correction by (eval sets the σ from
+  // the scenario: the odometry model at the distance between the views, or a declared prior).
+  AcceptanceConfig acceptance;
+  // When set, the prior's σ for a pair is this model at the believed distance between the two
+  // views (acceptanceFor); otherwise acceptance.prior as given.
+  std::optional<OdometryModel> odometry;
+  // Verification screens feature matching's pairings on the lines of every screen_stride-th cell.
+  int screen_stride = 4;
+};
+
+// The verdict's thresholds for a pair whose believed relative pose is T_0 (sensor J in sensor
+// I's frame): config.acceptance with the odometry model's σ at |T_0.t| when there is one.
+AcceptanceConfig acceptanceFor(const RegistrationConfig& config, const Eigen::Isometry3d& T_0);
+
+// One start of a two-stage method's verification: refined by its iconic method, and scored by
+// the robust iconic cost over the lines every hypothesis's estimate has (commonOverlapCosts).
+struct RegistrationHypothesis {
+  std::string start;                     // "T_F" (feature matching's best), "T_0", "pairing K" (its K-th)
+  std::string stage;                     // "screen" (the coarse lines alone) or "refine" (in full)
+  PoseVector nu0 = PoseVector::Zero();   // the start (map I's frame → the believed frame of J)
+  PoseVector nu = PoseVector::Zero();    // refined
+  double D_m = 0;                        // eq. 3 at the start's pairing (T_0: at T_0)
+  double cost = 0;                       // mean c²·ln(1 + u²/c²) over its stage's common lines, c = 3σ
+  int iterations = 0;
 };
 
 struct RegistrationResult {
@@ -47,6 +75,14 @@ struct RegistrationResult {
   std::vector<Feature> features_i, features_j;
   std::optional<ElevationMap> map_j;
   std::optional<FeatureMatch> feature_match;
+  // Two-stage methods whose feature stage found a pairing: each pairing screened and the costs
+  // over their common lines, then the best and T_0 refined and theirs (common_lines: of these
+  // two); chosen indexes the one kept. Empty otherwise.
+  std::vector<RegistrationHypothesis> hypotheses;
+  int chosen = -1;
+  long common_lines = 0;
+  // The rover's verdict on nu, made without truth (assessRegistration).
+  Assessment assessment;
 };
 
 // The grid of the rover's map of view J: map I's grid carried from sensor I to where the rover
@@ -54,7 +90,11 @@ struct RegistrationResult {
 // translation), so that map J covers what sensor J sees as map I covers what sensor I sees.
 MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, const Eigen::Isometry3d& believed_WS_j);
 
-// Registers range image J (at the believed pose, with its edge mask or null) against map I. The
+// Registers range image J (at the believed pose, with its edge mask or null) against map I. A
+// two-stage method refines T_F, T_0 and feature matching's next-best distinct pairings
+// (FeatureMatch::ranked) by its iconic method and keeps the refinement of lowest robust iconic
+// cost over the lines all of them have: it never returns what its own cost rates worse than
+// refining T_0. Every result carries the rover's verdict (assessRegistration, config.acceptance). The
 // estimate ν maps map I's frame to the frame image J's believed pose lives in; the corrected pose
 // of sensor J is poseFromVector(ν)⁻¹·believed. Feature matching builds map J on grid_j (in the
 // believed world; see believedGrid). Map I must be in the world frame (its grid's T_WM the

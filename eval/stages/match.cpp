@@ -53,6 +53,20 @@ nlohmann::ordered_json featuresJson(const std::vector<perception::Feature>& feat
   return out;
 }
 
+// The verdict's figures (perception::Assessment).
+nlohmann::ordered_json assessmentJson(const perception::Assessment& a) {
+  nlohmann::ordered_json j;
+  j["overlap"] = a.overlap;
+  j["overlap_fraction"] = a.overlap_fraction;
+  j["inlier_fraction"] = a.inlier_fraction;
+  j["rms_normalized"] = a.rms_normalized;
+  j["correction_m"] = a.correction_m;
+  j["correction_deg"] = a.correction_deg;
+  j["mahalanobis2"] = a.mahalanobis2;
+  j["degenerate"] = a.degenerate;
+  return j;
+}
+
 // ---- Pictures (eval/match_figures.hpp), apart from the registration: they only read its results.
 struct Registered {
   std::string method;
@@ -144,6 +158,35 @@ void run(RunState& s) {
       pair["degenerate"] = reg.ran_iconic && res.degenerate;
       pair["free_directions"] = res.free_directions;
       pair["overlap"] = res.overlap;
+      pair["covariance_calibrated"] = covariance && covarianceCalibrated(method);
+      // The rover's verdict, made without truth, and how it scores against the truth.
+      const perception::Assessment& a = reg.assessment;
+      pair["accepted"] = a.accepted;
+      pair["reject_reasons"] = a.reject_reasons;
+      pair["false_accept"] = a.accepted && !success;
+      pair["assessment"] = assessmentJson(a);
+      if (!reg.hypotheses.empty()) {
+        nlohmann::ordered_json hs = nlohmann::ordered_json::array();
+        for (std::size_t k = 0; k < reg.hypotheses.size(); ++k) {
+          const perception::RegistrationHypothesis& h = reg.hypotheses[k];
+          // Scoring only: where sensor J would be from the start and from its refinement.
+          const auto error = [&](const perception::PoseVector& nu) {
+            return perception::poseError(T_IJ, vi.T_WS.inverse() * perception::poseFromVector(nu).inverse() * believed_WS);
+          };
+          const perception::PoseError e0 = error(h.nu0), e1 = error(h.nu);
+          hs.push_back({{"start", h.start},
+                        {"stage", h.stage},
+                        {"D_m", h.D_m},
+                        {"iterations", h.iterations},
+                        {"cost", h.cost},
+                        {"chosen", int(k) == reg.chosen},
+                        {"start_translation_error_m", e0.translation_m},
+                        {"start_rotation_error_deg", e0.rotation_deg},
+                        {"translation_error_m", e1.translation_m},
+                        {"rotation_error_deg", e1.rotation_deg}});
+        }
+        pair["verification"] = {{"common_lines", reg.common_lines}, {"hypotheses", hs}};
+      }
       if (reg.feature_match) {
         const perception::FeatureMatch& fm = *reg.feature_match;
         nlohmann::ordered_json f;
@@ -186,6 +229,10 @@ void run(RunState& s) {
       registered.push_back({name, perception::poseFromVector(reg.nu).inverse() * believed_WS, res.rms_m});
       PairEstimate estimate{i, j, method, T_est, reg.nu, std::nullopt};
       if (covariance && res.covariance.allFinite()) estimate.covariance = res.covariance;
+      estimate.covariance_calibrated = covarianceCalibrated(method);
+      estimate.accepted = a.accepted;
+      estimate.T_WS_i = vi.T_WS;
+      estimate.believed_WS_j = believed_WS;
       s.estimates.push_back(estimate);
       nlohmann::ordered_json m;
       m["pair"] = {i, j};
@@ -193,15 +240,19 @@ void run(RunState& s) {
       m["translation_error_m"] = err.translation_m;
       m["rotation_error_deg"] = err.rotation_deg;
       m["success"] = success;
+      m["accepted"] = a.accepted;
+      m["false_accept"] = a.accepted && !success;
+      m["reject_reasons"] = a.reject_reasons;
       m["iterations"] = reg.iterations;
       m["time_s"] = seconds;
       m["initial_translation_error_m"] = start.translation_m;
       m["initial_rotation_error_deg"] = start.rotation_deg;
       s.metrics["registration"].push_back(m);
-      char line[200];
-      std::snprintf(line, sizeof line, "match     views %d-%d %-15s %3d iterations: error %.4f m %.3f deg (from %.3f m %.2f deg)%s",
+      char line[240];
+      std::snprintf(line, sizeof line, "match     views %d-%d %-18s %3d iterations: error %.4f m %.3f deg (from %.3f m %.2f deg)%s%s",
                     i, j, name.c_str(), reg.iterations, err.translation_m, err.rotation_deg, start.translation_m,
-                    start.rotation_deg, success ? "" : "  FAILED");
+                    start.rotation_deg, success ? "" : "  FAILED",
+                    a.accepted ? (success ? "" : " (accepted: a false accept)") : (success ? "  rejected (a false reject)" : "  rejected"));
       s.say(line);
     }
     pairPictures(s, i, j, believed_WS, registered);

@@ -11,54 +11,38 @@
 #include "eval/map_outputs.hpp"
 #include "eval/stages.hpp"
 #include "perception/composite.hpp"
+#include "perception/placement.hpp"
 
 namespace ambler::eval::stages {
 
 namespace {
-
-// A view's place in the composite: its sensor pose and the links (estimates) it was chained by.
-struct Placement {
-  bool placed = false;
-  Eigen::Isometry3d T_WS = Eigen::Isometry3d::Identity();
-  std::vector<const PairEstimate*> links;
-};
-
-// Matched poses: view 0 at its true pose (the composite's frame is view 0's world), then each
-// pair's estimate of the first listed method, applied from whichever view is placed, until
-// nothing more is (the scenario reader checked that every view is linked to view 0).
-std::vector<Placement> matchedPlacements(const RunState& s) {
-  const MatchMethod first = s.scenario.matching->methods.front();
-  std::vector<Placement> p(s.views.size());
-  p[0].placed = true;
-  p[0].T_WS = s.views[0].T_WS;
-  for (bool grew = true; grew;) {
-    grew = false;
-    for (const PairEstimate& e : s.estimates) {
-      if (e.method != first || p[e.i].placed == p[e.j].placed) continue;
-      const bool forward = p[e.i].placed;
-      Placement& to = p[forward ? e.j : e.i];
-      const Placement& from = p[forward ? e.i : e.j];
-      to.placed = true;
-      to.T_WS = from.T_WS * (forward ? e.T_IJ : e.T_IJ.inverse());
-      to.links = from.links;
-      to.links.push_back(&e);
-      grew = true;
-    }
-  }
-  return p;
-}
 
 void run(RunState& s) {
   const Scenario& sc = s.scenario;
   const MergeSpec& spec = *sc.merge;
   const perception::MapGrid grid = spec.grid();
   Stopwatch t;
-  std::vector<Placement> placements(s.views.size());
-  if (spec.poses == MergePoses::Matched) {
-    placements = matchedPlacements(s);
-  } else {
-    for (std::size_t k = 0; k < s.views.size(); ++k) placements[k] = {true, s.views[k].T_WS, {}};
+  // Matched poses: view 0 at its true pose (the composite's frame is view 0's world), the others
+  // chained through the first listed method's registrations that the rover accepted; a view no
+  // accepted registration reaches is left out. Only a calibrated covariance is propagated.
+  std::vector<perception::PlacementLink> links;
+  const MatchMethod first = sc.matching ? sc.matching->methods.front() : MatchMethod::IconicLm;
+  for (const PairEstimate& e : s.estimates) {
+    if (e.method != first) continue;
+    perception::PlacementLink l;
+    l.i = e.i, l.j = e.j, l.T_WS_i = e.T_WS_i, l.believed_WS_j = e.believed_WS_j, l.nu = e.nu, l.accepted = e.accepted;
+    if (e.covariance_calibrated) l.covariance = e.covariance;
+    links.push_back(l);
   }
+  std::vector<perception::ViewPlacement> placements;
+  if (spec.poses == MergePoses::Matched) {
+    placements = perception::placeViews(int(s.views.size()), 0, s.views[0].T_WS, links);
+  } else {
+    placements.resize(s.views.size());
+    for (std::size_t k = 0; k < s.views.size(); ++k)
+      placements[k] = {k == 0 ? perception::PlacementHow::Reference : perception::PlacementHow::Matched, s.views[k].T_WS, {}};
+  }
+  int views_used = 0;
   perception::LocusConfig locus = locusConfig(sc);
   locus.footprint_sigma = true;  // the footprint's error is shared by every view (docs/composite.md)
   // σ without the terrain's part (docs/locus.md, σ_rough): what is left is the part every view
@@ -71,6 +55,8 @@ void run(RunState& s) {
   perception::Raster<std::uint8_t> visible = perception::Raster<std::uint8_t>::Zero(grid.rows, grid.cols);
   for (std::size_t k = 0; k < s.views.size(); ++k) {
     const ViewState& v = s.views[k];
+    if (placements[k].how == perception::PlacementHow::LeftOut) continue;
+    ++views_used;
     // The scan as the map stage had it (unwrapped, its edges), at the composite's pose for it.
     perception::ElevationMap map = perception::mapAtPose(*v.locus, placements[k].T_WS, grid, locus);
     const perception::ElevationMap noise = perception::mapAtPose(*v.locus, placements[k].T_WS, grid, noise_only);
@@ -80,15 +66,8 @@ void run(RunState& s) {
         if (map.stateAt(r, c) == perception::CellState::Known && noise.stateAt(r, c) == perception::CellState::Known)
           shared(r, c) = std::sqrt(std::max(0.f, map.sigma()(r, c) * map.sigma()(r, c) - noise.sigma()(r, c) * noise.sigma()(r, c)));
     // Each link's pose covariance, first order and independent: variances add.
-    perception::Raster<float> extra = perception::Raster<float>::Zero(grid.rows, grid.cols);
-    bool any = false;
-    for (const PairEstimate* e : placements[k].links) {
-      if (!e->covariance) continue;
-      const perception::Raster<float> sr = perception::registrationSigma(map, e->nu, *e->covariance);
-      extra = (extra.array().square() + sr.array().square()).sqrt().matrix();
-      any = true;
-    }
-    if (any) perception::addSigma(map, extra);
+    const perception::Raster<float> extra = perception::placementSigma(map, placements[k].chain);
+    perception::addSigma(map, extra);
     perception::mergeInto(composite, composite_shared, map, shared);
     // What some view could see: visible if any view sees the true surface, else hidden if one
     // view's field of view holds it behind terrain.
@@ -103,13 +82,28 @@ void run(RunState& s) {
   s.addTime("merge", t.seconds());
   const MapMetrics m = mapMetrics(composite, truth, visible);
   s.metrics["composite"] = compositeJson(m, int(s.views.size()), mergePosesName(spec.poses));
+  s.metrics["composite"]["views_used"] = views_used;
+  nlohmann::ordered_json placement = nlohmann::ordered_json::array();
+  for (std::size_t k = 0; k < placements.size(); ++k) {
+    nlohmann::ordered_json e{{"view", k}, {"how", perception::placementHowName(placements[k].how)}};
+    // The links it was chained by, and those the rover rejected that would have placed it.
+    nlohmann::ordered_json chain = nlohmann::ordered_json::array();
+    for (const perception::ChainStep& c : placements[k].chain) chain.push_back({c.link->i, c.link->j});
+    e["links"] = chain;
+    placement.push_back(e);
+  }
+  s.metrics["composite"]["placement"] = placement;
+  nlohmann::ordered_json rejected = nlohmann::ordered_json::array();
+  for (const perception::PlacementLink& l : links)
+    if (!l.accepted) rejected.push_back({l.i, l.j});
+  s.metrics["composite"]["rejected_links"] = rejected;
   writeMapFiles(s.out / "maps", "composite", composite, &truth,
                 sc.name + ": composite of " + std::to_string(s.views.size()) + " views (" + mergePosesName(spec.poses) +
                     " poses)",
                 s.geo);
   char line[200];
-  std::snprintf(line, sizeof line, "merge     composite of %d views (%s poses): coverage %.1f%%, RMS error %.4f m, within 1σ %.0f%%",
-                int(s.views.size()), mergePosesName(spec.poses), 100 * m.coverage, m.rms_error_m, 100 * m.within_1sigma);
+  std::snprintf(line, sizeof line, "merge     composite of %d of %d views (%s poses): coverage %.1f%%, RMS error %.4f m, within 1σ %.0f%%",
+                views_used, int(s.views.size()), mergePosesName(spec.poses), 100 * m.coverage, m.rms_error_m, 100 * m.within_1sigma);
   s.say(line);
   s.composite = std::move(composite);
 }

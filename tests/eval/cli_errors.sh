@@ -304,12 +304,12 @@ mkdir axes && printf 'run,noise\n0,1\n1,2\n' >axes/results.shard-1-of-1.csv
 expect_error merge_header_not_the_sweeps 'axes/results\.shard-1-of-1\.csv: header does not start with run and the sweep.s axes' sweep ok.yaml --out axes --merge
 mkdir notbasin && printf 'run,seed\n0,1\n' >notbasin/basin.shard-1-of-1.csv
 expect_error basin_merge_not_a_basin_csv 'notbasin/basin\.shard-1-of-1\.csv: not a basin CSV' basin basin.yaml --out notbasin --merge --translation-m 0 --rotation-deg 0 --trials 1
-basin_header='method,translation_m,rotation_deg,trial,translation_error_m,rotation_error_deg,success,iterations,time_s'
-mkdir basintwice && printf '%s\niconic_lm,0,0,0,0,0,true,1,\niconic_lm,0,0,0,0,0,true,1,\n' "$basin_header" >basintwice/basin.shard-1-of-1.csv
+basin_header='method,translation_m,rotation_deg,trial,translation_error_m,rotation_error_deg,success,iterations,time_s,accepted,false_accept'
+mkdir basintwice && printf '%s\niconic_lm,0,0,0,0,0,true,1,,true,false\niconic_lm,0,0,0,0,0,true,1,,true,false\n' "$basin_header" >basintwice/basin.shard-1-of-1.csv
 expect_error basin_merge_row_twice 'basintwice/basin\.shard-1-of-1\.csv: row 3: a second row of iconic_lm' basin basin.yaml --out basintwice --merge --translation-m 0 --rotation-deg 0 --trials 1
-mkdir basinmethod && printf '%s\ngicp,0,0,0,0,0,true,1,\n' "$basin_header" >basinmethod/basin.shard-1-of-1.csv
+mkdir basinmethod && printf '%s\ngicp,0,0,0,0,0,true,1,,true,false\n' "$basin_header" >basinmethod/basin.shard-1-of-1.csv
 expect_error basin_merge_unknown_method 'basinmethod/basin\.shard-1-of-1\.csv: row 2: method gicp is not one of the scenario.s' basin basin.yaml --out basinmethod --merge --translation-m 0 --rotation-deg 0 --trials 1
-mkdir offgrid && printf 'method,translation_m,rotation_deg,trial,translation_error_m,rotation_error_deg,success,iterations,time_s\niconic_lm,0.7,0,0,0,0,true,1,\n' >offgrid/basin.shard-1-of-1.csv
+mkdir offgrid && printf '%s\niconic_lm,0.7,0,0,0,0,true,1,,true,false\n' "$basin_header" >offgrid/basin.shard-1-of-1.csv
 expect_error basin_merge_row_off_the_grid 'offgrid/basin\.shard-1-of-1\.csv: row 2: translation 0\.7 m is not on --translation-m' basin basin.yaml --out offgrid --merge --translation-m 0,0.5 --rotation-deg 0 --trials 1
 
 if ((fail)); then echo "some cases failed"; exit 1; fi

@@ -93,7 +93,7 @@ TEST(Basin, ZeroInitialErrorOnNoiseFreeTerrainSucceedsInEveryTrial) {
   ASSERT_EQ(records->size(), 1u + 5u * 3u);
   EXPECT_EQ(records->front(), (std::vector<std::string>{"method", "translation_m", "rotation_deg", "trial",
                                                          "translation_error_m", "rotation_error_deg", "success",
-                                                         "iterations", "time_s"}));
+                                                         "iterations", "time_s", "accepted", "false_accept"}));
   // Every method that starts from T_0 (the iconic ones, and features+iconic, whose descent starts
   // from T_F) finds the truth. Feature matching alone does not use T_0 beyond the prior's bounds:
   // it is the same search at any initial error, so its trials agree to the bit; whether it
@@ -107,6 +107,13 @@ TEST(Basin, ZeroInitialErrorOnNoiseFreeTerrainSucceedsInEveryTrial) {
       continue;
     }
     EXPECT_EQ(row[6], "true") << row[0] << " trial " << row[3] << ": " << row[4] << " m, " << row[5] << " deg";
+    // At the truth, on terrain the sensor model describes, the rover's verdict is to accept.
+    EXPECT_EQ(row[9], "true") << row[0] << " trial " << row[3];
+  }
+  // false_accept is accepted and not a success, row by row.
+  for (std::size_t k = 1; k < records->size(); ++k) {
+    const auto& row = (*records)[k];
+    EXPECT_EQ(row[10], row[9] == "true" && row[6] != "true" ? "true" : "false") << row[0];
   }
   for (const char* png : {"basin_features.png", "basin_features_iconic.png", "basin_iconic.png",
                           "basin_iconic_lm.png", "basin_iconic_weighted.png", "basin_boundary.png", "basin.md"})
