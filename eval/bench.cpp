@@ -303,7 +303,7 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
   const perception::ScanMap map_j = perception::scanToMap(scanner.scan(T_j, viewSeed(sc.seed, j)).image, sc.sensor, T_j, grid, config);
   const PairRegistration pair(map_i, T_i, map_j, T_j, registrationConfig(sc), sc.matching->methods);
   // From the rover's belief, as the match stage starts.
-  const Eigen::Isometry3d T_0 = sc.matching->initialEstimate(pair.trueRelative());
+  const Eigen::Isometry3d T_0 = sc.matching->initialEstimate(pair.trueRelative(), sc.seed, i, j);
 
   nlohmann::ordered_json j_out, methods = nlohmann::ordered_json::array();
   std::printf("ambler bench match (%s, views %d-%d, %dx%d cells of %.2f m; medians of %d)\n", sc.name.c_str(), i, j,

@@ -3,6 +3,8 @@
 // typed value reader is scenario_reader.hpp/.cpp; the resolved form (every default written out,
 // numbers that read back bit for bit) is scenario_writer.cpp.
 #include "eval/scenario.hpp"
+
+#include "base/random.hpp"
 #include "perception/sensor_geometry.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -315,7 +317,8 @@ MapSpec readMap(const Reader& reader, const YAML::Node& node) {
 }
 
 MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int views) {
-  const Fields f(reader, node, "matching", {"pairs", "methods", "initial_error", "success", "prior", "odometry", "gate"});
+  const Fields f(reader, node, "matching", {"pairs", "methods", "initial_error", "success", "prior", "odometry", "gate",
+                                                     "draw_initial_error"});
   MatchingSpec m;
   if (views < 2) reader.fail("matching", "needs at least two views, the scenario has " + std::to_string(views));
   if (const auto p = f.get("pairs")) {
@@ -377,6 +380,9 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
     om.heading_floor_deg = fo.number("heading_floor_deg", {0.0, 90.0, true, false}, om.heading_floor_deg);
   }
   m.gate_by_prior = f.choice("gate", {"odometry", "prior"}, "odometry") == "prior";
+  m.draw_initial_error = f.boolean("draw_initial_error", false);
+  if (m.draw_initial_error && f.get("initial_error"))
+    reader.fail("matching.draw_initial_error", "true draws the initial error from the odometry model; remove initial_error");
   return m;
 }
 
@@ -550,8 +556,30 @@ std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m) {
 }
 
 
-Eigen::Isometry3d MatchingSpec::initialEstimate(const Eigen::Isometry3d& T_IJ) const {
-  return T_IJ * perception::sensorPose(initial_error.xyz_m, initial_error.rpy_rad);
+Eigen::Isometry3d MatchingSpec::initialEstimate(const Eigen::Isometry3d& T_IJ, std::uint64_t seed, int i, int j) const {
+  if (!draw_initial_error) return T_IJ * perception::sensorPose(initial_error.xyz_m, initial_error.rpy_rad);
+  // z ~ N(0, I₆) within χ²₆'s 99 % point; E = (σ_t·z_t, rotation vector σ_θ·z_r) with σ the
+  // odometry model's at the believed distance |(T_IJ·E).t| (a fixed point: the rover's σ is that
+  // of the distance it believes it walked), so the correction's squared Mahalanobis distance under
+  // the rover's prior is |z|² exactly.
+  base::Rng rng(base::streamKey(seed, 3000 + std::uint64_t(i), std::uint64_t(j)));
+  Eigen::Matrix<double, 6, 1> z;
+  do {
+    for (int k = 0; k < 6; ++k) z(k) = rng.normal();
+  } while (z.squaredNorm() > 16.812);
+  double d = T_IJ.translation().norm();
+  Eigen::Isometry3d E = Eigen::Isometry3d::Identity();
+  for (int k = 0; k < 50; ++k) {
+    const perception::PriorSigma sigma = odometry.at(d);
+    E.linear() = Eigen::AngleAxisd(z.tail<3>().norm() * sigma.rotation_deg * M_PI / 180,
+                                   z.tail<3>().norm() > 0 ? Eigen::Vector3d(z.tail<3>().normalized()) : Eigen::Vector3d::UnitZ())
+                     .toRotationMatrix();
+    E.translation() = sigma.translation_m * z.head<3>();
+    const double next = (T_IJ * E).translation().norm();
+    if (std::abs(next - d) < 1e-12) break;
+    d = next;
+  }
+  return T_IJ * E;
 }
 
 perception::MapGrid MapSpec::grid() const {

@@ -92,9 +92,14 @@ struct MatchingSpec {
   perception::OdometryModel odometry;
   bool gate_by_prior = false;
 
+  // draw_initial_error: E is drawn, per pair, from the odometry model (seeded by the scenario's
+  // seed and the pair), within its 99 % region (docs/matching.md, "The rover's prior"), instead of
+  // initial_error (which must then be absent).
+  bool draw_initial_error = false;
+
   // What the rover believes of sensor J's pose in sensor I's frame, given the truth T_IJ:
-  // T_0 = T_IJ·E.
-  Eigen::Isometry3d initialEstimate(const Eigen::Isometry3d& T_IJ) const;
+  // T_0 = T_IJ·E (E drawn for pair (i, j) under `seed` when draw_initial_error).
+  Eigen::Isometry3d initialEstimate(const Eigen::Isometry3d& T_IJ, std::uint64_t seed = 0, int i = 0, int j = 1) const;
 };
 
 // The composite map (docs/scenario.md, "merge"): every view's scan mapped on one grid at its pose

@@ -178,8 +178,10 @@ std::string resolvedYaml(const Scenario& s) {
     y += "]\n  methods: [";
     for (std::size_t i = 0; i < m.methods.size(); ++i) y += std::string(i ? ", " : "") + matchMethodName(m.methods[i]);
     const auto& e = m.initial_error;
-    y += "]\n  initial_error: {xyz_m: " + list({num(e.xyz_m.x()), num(e.xyz_m.y()), num(e.xyz_m.z())}) +
-         ", rpy_deg: " + list({deg(e.rpy_rad.x()), deg(e.rpy_rad.y()), deg(e.rpy_rad.z())}) + "}\n";
+    y += "]\n";
+    if (!m.draw_initial_error)  // drawn, it is the odometry model's (and initial_error may not be given)
+      y += "  initial_error: {xyz_m: " + list({num(e.xyz_m.x()), num(e.xyz_m.y()), num(e.xyz_m.z())}) +
+           ", rpy_deg: " + list({deg(e.rpy_rad.x()), deg(e.rpy_rad.y()), deg(e.rpy_rad.z())}) + "}\n";
     y += "  success: {translation_m: " + num(m.success_translation_m) + ", rotation_deg: " +
          num(m.success_rotation_deg) + "}\n";
     y += "  prior: {translation_m: " + num(m.prior_translation_m) + ", rotation_deg: " + num(m.prior_rotation_deg) + "}\n";
@@ -188,6 +190,7 @@ std::string resolvedYaml(const Scenario& s) {
          num(o.translation_floor_m) + ", heading_deg_per_m: " + num(o.heading_deg_per_m) +
          ", heading_floor_deg: " + num(o.heading_floor_deg) + "}\n";
     y += std::string("  gate: ") + (m.gate_by_prior ? "prior" : "odometry") + "\n";
+    y += std::string("  draw_initial_error: ") + (m.draw_initial_error ? "true" : "false") + "\n";
   }
   if (s.merge) {
     const auto& m = *s.merge;

@@ -15,6 +15,7 @@ const char* placementHowName(PlacementHow h) {
     case PlacementHow::Reference: return "reference";
     case PlacementHow::Matched: return "matched";
     case PlacementHow::LeftOut: return "left_out";
+    case PlacementHow::True: return "true";
   }
   return "left_out";
 }

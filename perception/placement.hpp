@@ -4,6 +4,7 @@
 // accepted, and views no accepted registration reaches left out; the σ each link's calibrated
 // covariance adds to the cells of every view placed through it. Onboard code.
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -27,7 +28,9 @@ struct PlacementLink {
   Eigen::Isometry3d relative(const PoseVector& delta = PoseVector::Zero()) const;
 };
 
-enum class PlacementHow : std::uint8_t { Reference, Matched, LeftOut };
+// reference: where the caller put it; matched: chained through accepted links; left_out: no
+// accepted link reaches it; true: at its true pose (eval's `poses: true`, no placement made).
+enum class PlacementHow : std::uint8_t { Reference, Matched, LeftOut, True };
 const char* placementHowName(PlacementHow h);
 
 // A link of a view's chain, and whether it was used from J to I (view I placed from view J).

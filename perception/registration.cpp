@@ -25,6 +25,51 @@ MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, con
   return g;
 }
 
+Verification verifyHypotheses(const ElevationMap& map_i, const LocusMapper& image_j,
+                              const std::vector<RegistrationHypothesis>& starts, double D0, const Refiner& refine,
+                              const RegistrationConfig& config) {
+  Verification v;
+  std::vector<RegistrationHypothesis>& hs = v.hypotheses;
+  const double c = config.acceptance.inlier_sigmas;
+  std::vector<std::vector<double>> residuals;
+  std::size_t best = 0;
+  if (!starts.empty()) {
+    IconicOptions coarse = config.iconic;
+    coarse.strides = {config.screen_stride};
+    for (RegistrationHypothesis h : starts) {
+      const IconicResult r = refine(h.nu0, coarse);
+      h.stage = "screen", h.nu = r.nu, h.iterations = r.iterations;
+      residuals.push_back(normalizedResiduals(map_i, image_j, h.nu));
+      hs.push_back(h);
+    }
+    const std::vector<double> costs = commonOverlapCosts(residuals, c, nullptr);
+    for (std::size_t k = 0; k < costs.size(); ++k) {
+      hs[k].cost = costs[k];
+      if (costs[k] < costs[best]) best = k;
+    }
+  }
+  // The two refined in full: the best pairing (from where its screen ended) and T_0.
+  std::vector<IconicResult> results;
+  const std::size_t first = hs.size();
+  if (!starts.empty()) {
+    results.push_back(refine(hs[best].nu, config.iconic));
+    hs.push_back({hs[best].start, "refine", hs[best].nu, results.back().nu, hs[best].D_m, 0, results.back().iterations});
+  }
+  results.push_back(refine(PoseVector::Zero(), config.iconic));
+  hs.push_back({"T_0", "refine", PoseVector::Zero(), results.back().nu, D0, 0, results.back().iterations});
+  residuals.clear();
+  for (const IconicResult& r : results) residuals.push_back(normalizedResiduals(map_i, image_j, r.nu));
+  const std::vector<double> costs = commonOverlapCosts(residuals, c, &v.common_lines);
+  std::size_t kept = 0;
+  for (std::size_t k = 0; k < results.size(); ++k) {
+    hs[first + k].cost = costs[k];
+    if (costs[k] < costs[kept]) kept = k;
+  }
+  v.chosen = int(first + kept);
+  v.result = std::move(results[kept]);
+  return v;
+}
+
 RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& image_j,
                                  const Raster<std::uint8_t>* edges_j, const MapGrid& grid_j,
                                  RegistrationMethod method, const RegistrationConfig& config,
@@ -59,7 +104,7 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
     return out;
   }
   out.ran_iconic = true;
-  const auto refine = [&](const PoseVector& start, const IconicOptions& options) {
+  const Refiner refine = [&](const PoseVector& start, const IconicOptions& options) {
     switch (method) {
       case RegistrationMethod::Iconic:
       case RegistrationMethod::FeaturesIconic:
@@ -77,43 +122,16 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
   if (!twoStage(method) || !fm->found) {
     out.iconic = refine(nu0, config.iconic);
   } else {
-    // Verification (docs/matching.md): feature matching's distinct pairings (T_F, then the next
-    // best) are screened by the iconic method on the coarse lines alone, the best of them by the
-    // robust cost over the lines all have is refined in full, T_0 is refined in full, and of the
-    // two the lower cost over their common lines is kept (T_F's on a tie, as the paper's).
     const auto inBelieved = [&](const PoseVector& nu_f) { return vectorFromPose(grid_j.T_WM * poseFromVector(nu_f)); };
-    std::vector<RegistrationHypothesis>& hs = out.hypotheses;
-    IconicOptions coarse = config.iconic;
-    coarse.strides = {config.screen_stride};
-    std::vector<std::vector<double>> residuals;
-    for (std::size_t k = 0; k < fm->ranked.size(); ++k) {
-      const std::string name = k == 0 ? "T_F" : "pairing " + std::to_string(k + 1);
-      RegistrationHypothesis h{name, "screen", inBelieved(fm->ranked[k].nu), {}, fm->ranked[k].D, 0, 0};
-      const IconicResult r = refine(h.nu0, coarse);
-      h.nu = r.nu, h.iterations = r.iterations;
-      residuals.push_back(normalizedResiduals(map_i, mapper, h.nu));
-      hs.push_back(h);
-    }
-    long common = 0;
-    std::vector<double> costs = commonOverlapCosts(residuals, config.acceptance.inlier_sigmas, &common);
-    std::size_t best = 0;
-    for (std::size_t k = 0; k < costs.size(); ++k) {
-      hs[k].cost = costs[k];
-      if (costs[k] < costs[best]) best = k;
-    }
-    // The two refined in full: the best pairing (from where its screen ended) and T_0.
-    std::vector<IconicResult> results;
-    results.push_back(refine(hs[best].nu, config.iconic));
-    results.push_back(refine(PoseVector::Zero(), config.iconic));
-    const std::size_t first = hs.size();
-    hs.push_back({hs[best].start, "refine", hs[best].nu, results[0].nu, hs[best].D_m, 0, results[0].iterations});
-    hs.push_back({"T_0", "refine", PoseVector::Zero(), results[1].nu, fm->D0, 0, results[1].iterations});
-    residuals = {normalizedResiduals(map_i, mapper, results[0].nu), normalizedResiduals(map_i, mapper, results[1].nu)};
-    costs = commonOverlapCosts(residuals, config.acceptance.inlier_sigmas, &out.common_lines);
-    hs[first].cost = costs[0], hs[first + 1].cost = costs[1];
-    const std::size_t kept = costs[1] < costs[0] ? 1 : 0;
-    out.chosen = int(first + kept);
-    out.iconic = std::move(results[kept]);
+    std::vector<RegistrationHypothesis> starts;
+    for (std::size_t k = 0; k < fm->ranked.size(); ++k)
+      starts.push_back({k == 0 ? "T_F" : "pairing " + std::to_string(k + 1), "screen", inBelieved(fm->ranked[k].nu), {},
+                        fm->ranked[k].D, 0, 0});
+    Verification v = verifyHypotheses(map_i, mapper, starts, fm->D0, refine, config);
+    out.hypotheses = std::move(v.hypotheses);
+    out.chosen = v.chosen;
+    out.common_lines = v.common_lines;
+    out.iconic = std::move(v.result);
   }
   out.nu = out.iconic.nu;
   out.iterations = out.iconic.iterations;

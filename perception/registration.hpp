@@ -4,6 +4,7 @@
 // Levenberg–Marquardt, and its uncertainty-weighted form. What the match stage, `ambler bench
 // match` and the experiments call. Onboard code: image J carries the pose the rover believes.
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -84,6 +85,24 @@ struct RegistrationResult {
   // The rover's verdict on nu, made without truth (assessRegistration).
   Assessment assessment;
 };
+
+// Verification (docs/matching.md, "Verification"): each start (feature matching's distinct
+// pairings, best first, in the believed frame: nu0, start, D_m) is screened by `refine` on the
+// lines of every config.screen_stride-th cell; the one of lowest robust cost over the lines all
+// screened estimates have (commonOverlapCosts, c = acceptance.inlier_sigmas) is refined in full
+// from where its screen ended, and so is T_0 (ν = 0); of the two the lower cost over their common
+// lines is kept, the pairing's on a tie. So the result is never one that the cost rates worse than
+// refining T_0. Without starts, T_0's refinement alone.
+using Refiner = std::function<IconicResult(const PoseVector& start, const IconicOptions& options)>;
+struct Verification {
+  std::vector<RegistrationHypothesis> hypotheses;  // the screens, then the two refinements
+  int chosen = -1;                                 // the one kept
+  long common_lines = 0;                           // of the two refinements
+  IconicResult result;
+};
+Verification verifyHypotheses(const ElevationMap& map_i, const LocusMapper& image_j,
+                              const std::vector<RegistrationHypothesis>& starts, double D0, const Refiner& refine,
+                              const RegistrationConfig& config);
 
 // The grid of the rover's map of view J: map I's grid carried from sensor I to where the rover
 // believes sensor J is (T_WM_J = believed_WS_J·T_WS_I⁻¹, kept gravity-aligned: its yaw and

@@ -125,7 +125,7 @@ void run(RunState& s) {
     const ViewState& vj = s.views[j];
     const PairRegistration pair_reg(*vi.locus, vi.T_WS, *vj.locus, vj.T_WS, config, spec.methods);
     const Eigen::Isometry3d& T_IJ = pair_reg.trueRelative();  // the truth, for scoring only
-    const Eigen::Isometry3d T_0 = spec.initialEstimate(T_IJ);  // what the rover believes
+    const Eigen::Isometry3d T_0 = spec.initialEstimate(T_IJ, sc.seed, i, j);  // what the rover believes
     const Eigen::Isometry3d believed_WS = vi.T_WS * T_0;       // sensor J in the believed world
     const perception::ElevationMap& map_i = vi.locus->map;
     const perception::MapGrid grid_j = perception::believedGrid(map_i.grid(), vi.T_WS, believed_WS);

@@ -40,7 +40,7 @@ void run(RunState& s) {
   } else {
     placements.resize(s.views.size());
     for (std::size_t k = 0; k < s.views.size(); ++k)
-      placements[k] = {k == 0 ? perception::PlacementHow::Reference : perception::PlacementHow::Matched, s.views[k].T_WS, {}};
+      placements[k] = {k == 0 ? perception::PlacementHow::Reference : perception::PlacementHow::True, s.views[k].T_WS, {}};
   }
   int views_used = 0;
   perception::LocusConfig locus = locusConfig(sc);

@@ -4,9 +4,11 @@
 // despite dropped and spurious features; the prior's rotation bound is honoured.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <stdexcept>
 
 #include "perception/feature_matching.hpp"
 #include "perception/sensor_geometry.hpp"
@@ -112,6 +114,42 @@ TEST(FeatureMatching, RecoversThePapersCaseExactlyWithoutNoise) {
   EXPECT_EQ(m.pairs, truth);
   // D: the three map-1 features map 2 did not see cost d_max each; the rest 0.
   EXPECT_NEAR(m.D, 3 * FeatureMatchConfig{}.d_max_m, 1e-9);
+  // The ranked pairings verification refines: T_F first, then others by D, each distinct (some
+  // feature of map 1 lands at least inlier_m apart under any two), all better than T_0.
+  const FeatureMatchConfig config;
+  ASSERT_FALSE(m.ranked.empty());
+  EXPECT_LE(int(m.ranked.size()), config.keep_ranked);
+  EXPECT_EQ(m.ranked.front().nu, m.nu);
+  EXPECT_EQ(m.ranked.front().D, m.D);
+  for (std::size_t a = 0; a < m.ranked.size(); ++a) {
+    EXPECT_LT(m.ranked[a].D, m.D0);
+    if (a > 0) EXPECT_LE(m.ranked[a - 1].D, m.ranked[a].D);
+    for (std::size_t b = a + 1; b < m.ranked.size(); ++b) {
+      double apart = 0;
+      for (const Feature& f : f1)
+        apart = std::max(apart, (poseFromVector(m.ranked[a].nu) * f.position - poseFromVector(m.ranked[b].nu) * f.position).norm());
+      EXPECT_GE(apart, config.inlier_m) << a << " and " << b;
+    }
+  }
+}
+
+// keep_ranked bounds the list, 0 keeps none and leaves T_F as it was.
+TEST(FeatureMatching, RankedPairingsHonourKeepRanked) {
+  const std::vector<Feature> f1 = scene(7);
+  const std::vector<Feature> f2 = secondView(f1, paperCase(), 0.03, nullptr);
+  FeatureMatchConfig none;
+  none.keep_ranked = 0;
+  FeatureMatchConfig five;
+  five.keep_ranked = 5;
+  const FeatureMatch a = matchFeatures(f1, f2, knownMap(), PoseVector::Zero(), none);
+  const FeatureMatch b = matchFeatures(f1, f2, knownMap(), PoseVector::Zero(), five);
+  EXPECT_TRUE(a.ranked.empty());
+  EXPECT_LE(b.ranked.size(), 5u);
+  EXPECT_EQ(a.nu, b.nu);
+  EXPECT_EQ(a.D, b.D);
+  FeatureMatchConfig bad;
+  bad.keep_ranked = -1;
+  EXPECT_THROW(matchFeatures(f1, f2, knownMap(), PoseVector::Zero(), bad), std::invalid_argument);
 }
 
 TEST(FeatureMatching, NoisyPositionsGiveTheFitsAccuracy) {

@@ -22,40 +22,9 @@ namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// The sphere of centre c and radius R (the dome is its cap above the ground it replaces).
-struct Dome {
-  Eigen::Vector3d c{1.0, 4.0, -5.5};
-  double R = 6.0;
-  double z(double x, double y) const { return c.z() + std::sqrt(R * R - (x - c.x()) * (x - c.x()) - (y - c.y()) * (y - c.y())); }
-};
-
-// A noise-free image of the dome: each ray's first meeting with the sphere, NaN if none.
-RangeImage domeImage(const Dome& dome, const Eigen::Isometry3d& T_WS) {
-  RangeImage img = RangeImage::blank(64, 256, 30 * kDeg, 80 * kDeg);
-  img.T_WS = T_WS;
-  const Eigen::Vector3d o = T_WS.translation();
-  for (int r = 0; r < img.rows(); ++r)
-    for (int c = 0; c < img.cols(); ++c) {
-      const Eigen::Vector3d d = T_WS.linear() * beamDirection(img.phi[r], img.theta[c]);
-      const Eigen::Vector3d oc = o - dome.c;
-      const double b = d.dot(oc), disc = b * b - (oc.squaredNorm() - dome.R * dome.R);
-      const double t = disc >= 0 ? -b - std::sqrt(disc) : std::numeric_limits<double>::quiet_NaN();
-      img.range(r, c) = t > 0 ? float(t) : std::numeric_limits<float>::quiet_NaN();
-    }
-  return img;
-}
-
-// Map 1: the dome's exact heights over x ∈ [−1, 3], y ∈ [1.5, 5] at 10 cm (the part of it the
-// sensor below sees well: the back side past y ≈ 5.8 faces away from it).
-ElevationMap domeMap(const Dome& dome) {
-  ElevationMap m(MapGrid::covering(-1, 3, 1.5, 5, 0.1));
-  for (int r = 0; r < m.grid().rows; ++r)
-    for (int c = 0; c < m.grid().cols; ++c) {
-      const Eigen::Vector2d p = m.grid().center(r, c);
-      m.setKnown(r, c, float(dome.z(p.x(), p.y())), 1e-3f);
-    }
-  return m;
-}
+using test::Dome;
+using test::domeImage;
+using test::domeMap;
 
 TEST(Iconic, RotationDerivativeMatchesFiniteDifferences) {
   for (const Eigen::Vector3d& r : {Eigen::Vector3d(0.3, -0.2, 0.5), Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1e-3, 2e-3, -1e-3)}) {
@@ -121,42 +90,8 @@ TEST(Iconic, ErrorAtTheTruthIsTheInterpolationsOnly) {
 }
 
 
-// Ground with three sphere caps (rock-like bumps): every one of the six parameters is constrained.
-struct Caps {
-  std::vector<Eigen::Vector3d> centre{{-1.0, 4.0, -1.2}, {1.5, 6.0, -0.6}, {0.5, 2.5, -0.9}};
-  std::vector<double> radius{1.5, 1.0, 1.1};
-  double z(double x, double y) const {
-    double z = 0;
-    for (std::size_t i = 0; i < centre.size(); ++i) {
-      const double d2 = (x - centre[i].x()) * (x - centre[i].x()) + (y - centre[i].y()) * (y - centre[i].y());
-      if (d2 < radius[i] * radius[i]) z = std::max(z, centre[i].z() + std::sqrt(radius[i] * radius[i] - d2));
-    }
-    return z;
-  }
-  // The first meeting of the ray o + t·d with the ground or a cap above it.
-  double range(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const {
-    double best = d.z() < 0 ? -o.z() / d.z() : std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < centre.size(); ++i) {
-      const Eigen::Vector3d oc = o - centre[i];
-      const double b = d.dot(oc), disc = b * b - (oc.squaredNorm() - radius[i] * radius[i]);
-      if (disc < 0) continue;
-      const double t = -b - std::sqrt(disc);
-      if (t > 0 && t < best && (o + t * d).z() >= 0) best = t;
-    }
-    return best;
-  }
-};
-
-RangeImage capsImage(const Caps& caps, const Eigen::Isometry3d& T_WS) {
-  RangeImage img = RangeImage::blank(64, 256, 30 * kDeg, 80 * kDeg);
-  img.T_WS = T_WS;
-  for (int r = 0; r < img.rows(); ++r)
-    for (int c = 0; c < img.cols(); ++c) {
-      const double t = caps.range(T_WS.translation(), T_WS.linear() * beamDirection(img.phi[r], img.theta[c]));
-      img.range(r, c) = t < 40 ? float(t) : std::numeric_limits<float>::quiet_NaN();
-    }
-  return img;
-}
+using test::Caps;
+using test::capsImage;
 
 // Both iconic methods recover a transform from an initial error of 0.14 m and 1.8°. View 1 maps
 // the caps in the world frame; view 2, 0.3 m aside and turned 4°, is mapped in a frame moved by
