@@ -3,7 +3,8 @@
 // markdown tables and plots. locus-vs-cartesian: the locus map against the Cartesian baseline
 // across surface orientation and noise, and across map resolution
 // (docs/experiments/locus_vs_cartesian.md). matching: every matching method against the rover's
-// initial error (docs/experiments/matching.md).
+// initial error (docs/experiments/matching.md). acceptance: the rover's verdict on every
+// registration against the truth (docs/experiments/acceptance.md).
 #include <filesystem>
 #include <string>
 
@@ -32,5 +33,13 @@ std::string runMatching(const ExperimentOptions& options);
 // merged reports the same): writes out/table.md and out/basin.png and returns the markdown of
 // table.md. Throws SweepError as runMatching does, and when the CSV is missing or not the sweep's.
 std::string reportMatching(const ExperimentOptions& options);
+
+// Runs the three acceptance sweeps (acceptance_{mars,fractal,dem}_seeds.yaml) into
+// out/{mars,fractal,dem}/, then reportAcceptance: writes out/table.md (per terrain and method:
+// successes, accepted, false accepts and rejects, worse than the start unflagged) and returns it.
+// Throws SweepError for a bad sweep file, a sweep without the seed axis or matching methods, or a
+// failed run.
+std::string runAcceptance(const ExperimentOptions& options);
+std::string reportAcceptance(const ExperimentOptions& options);
 
 }  // namespace ambler::eval

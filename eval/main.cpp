@@ -164,6 +164,22 @@ int main(int argc, char** argv) {
                      "Run nothing: report DIR/basin/results.csv as it is (e.g. merged from shards)");
   matching->add_flag("--quiet,-q", match_quiet, "No progress lines on stderr");
 
+  ExperimentOptions acc_opt;
+  std::string acc_out, acc_sweeps = acc_opt.sweeps.string();
+  bool acc_quiet = false, acc_report = false;
+  auto* acceptance = experiment->add_subcommand(
+      "acceptance", "The rover's verdict on every matching method against the truth, three terrains x 100 seeds: "
+                    "DIR/table.md and each terrain's DIR/TERRAIN/results.csv.");
+  acceptance->add_option("--out,-o", acc_out, "Experiment directory to write (created if missing)")->required();
+  acceptance->add_flag("--quick", acc_opt.quick, "A reduced run: the first seed of each terrain");
+  acceptance->add_option("--sweeps", acc_sweeps, "Directory of acceptance_{mars,fractal,dem}_seeds.yaml")
+      ->capture_default_str();
+  acceptance->add_option("--jobs,-j", acc_opt.jobs, "Scenarios run at once (each already uses every core)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  acceptance->add_flag("--report", acc_report, "Run nothing: report DIR/TERRAIN/results.csv as they are");
+  acceptance->add_flag("--quiet,-q", acc_quiet, "No progress lines on stderr");
+
   // CLI11 would say "A subcommand is required" for a mistyped command.
   if (argc > 1 && argv[1][0] != '-') {
     std::string names;
@@ -245,6 +261,12 @@ int main(int argc, char** argv) {
       match_opt.sweeps = match_sweeps;
       match_opt.progress = !match_quiet;
       std::fputs((match_report ? reportMatching(match_opt) : runMatching(match_opt)).c_str(), stdout);
+    } else if (*acceptance) {
+      checkOutDir(acc_out);
+      acc_opt.out = acc_out;
+      acc_opt.sweeps = acc_sweeps;
+      acc_opt.progress = !acc_quiet;
+      std::fputs((acc_report ? reportAcceptance(acc_opt) : runAcceptance(acc_opt)).c_str(), stdout);
     } else if (*bench_scan) {
       bench_opt.json = bench_json;
       benchScan(bench_opt);
