@@ -119,6 +119,7 @@ Scenario pairScenario(const Scenario& sc) {
 // records (header first), for the figures.
 struct Tally {
   std::vector<std::vector<int>> ok, n;               // [method][cell]
+  std::vector<std::vector<int>> accepted, false_accept;  // [method][cell]: the rover's verdict
   std::vector<std::vector<std::vector<double>>> err;  // [method][cell] translation errors
   std::vector<std::vector<double>> ok_err;            // [method] translation errors of the successes
 };
@@ -151,9 +152,11 @@ std::string summary(const Scenario& sc, const BasinOptions& opt, const Tally& t,
         "°.\n\n";
   md += "The 95 % boundary: for each initial rotation, the largest initial translation up to which every "
         "cell succeeds in at least 95 % of its trials (— where even the first cell does not).\n\n";
-  md += "| method | successes | median translation error of the successes |";
+  md += "Accepted: the rover's verdict (docs/matching.md, \"Acceptance\"), gated by the declared prior; a false "
+        "accept is accepted and not a success, a false reject a success not accepted.\n\n";
+  md += "| method | successes | accepted | false accepts | false rejects | median translation error of the successes |";
   for (const double r : g.rotation_deg) md += " " + numberText(r) + "° |";
-  md += "\n|---|---:|---:|";
+  md += "\n|---|---:|---:|---:|---:|---:|";
   for (std::size_t k = 0; k < g.rotation_deg.size(); ++k) md += "---:|";
   md += "\n";
   for (std::size_t m = 0; m < methods.size(); ++m) {
@@ -161,7 +164,10 @@ std::string summary(const Scenario& sc, const BasinOptions& opt, const Tally& t,
     for (std::size_t c = 0; c < t.ok[m].size(); ++c) ok += t.ok[m][c], n += t.n[m][c];
     char buf[64];
     std::snprintf(buf, sizeof buf, "%d/%d (%.0f %%)", ok, n, n ? 100.0 * ok / n : 0.0);
-    md += "| " + methods[m].label + " | " + buf + " | ";
+    int acc = 0, fa = 0;
+    for (std::size_t c = 0; c < t.ok[m].size(); ++c) acc += t.accepted[m][c], fa += t.false_accept[m][c];
+    md += "| " + methods[m].label + " | " + buf + " | " + std::to_string(acc) + " | " + std::to_string(fa) + " | " +
+          std::to_string(ok - (acc - fa)) + " | ";
     if (t.ok_err[m].empty()) {
       md += "— |";
     } else {
@@ -191,6 +197,8 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
   Tally t;
   t.ok.assign(spec.methods.size(), std::vector<int>(cells, 0));
   t.n = t.ok;
+  t.accepted = t.ok;
+  t.false_accept = t.ok;
   t.err.assign(spec.methods.size(), std::vector<std::vector<double>>(cells));
   t.ok_err.assign(spec.methods.size(), {});
   std::map<std::string, std::size_t> t_index, r_index;
@@ -202,6 +210,8 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
     const std::size_t cell = t_index.at(row[1]) * g.rotation_deg.size() + r_index.at(row[2]);
     ++t.n[m][cell];
     if (row[6] == "true") ++t.ok[m][cell];
+    if (row[9] == "true") ++t.accepted[m][cell];
+    if (row[10] == "true") ++t.false_accept[m][cell];
     double e = 0;
     if (std::from_chars(row[4].data(), row[4].data() + row[4].size(), e).ec == std::errc()) {
       t.err[m][cell].push_back(e);
@@ -216,7 +226,7 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
     SuccessGrid h;
     const std::string name = matchMethodName(spec.methods[m]);
     h.title = sc.name + ": " + name;
-    h.subtitle = criterion + "; median error";
+    h.subtitle = criterion + "; median error; FA k: k false accepts";
     h.row_axis = "initial translation";
     h.col_axis = g.vertical_axis ? "initial rotation (yaw)" : "initial rotation (about a random axis)";
     for (const double v : g.translation_m) h.row_labels.push_back(numberText(v) + " m");
@@ -232,6 +242,7 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
         std::snprintf(buf, sizeof buf, med < 0.1 ? "%.1f cm" : "%.2f m", med < 0.1 ? 100 * med : med);
         note = buf;
       }
+      if (t.false_accept[m][c] > 0) note += " FA " + std::to_string(t.false_accept[m][c]);
       h.notes.push_back(note);
       b.rate.push_back(t.n[m][c] ? t.ok[m][c] / double(t.n[m][c]) : 0.0);
     }

@@ -368,6 +368,44 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
   return res;
 }
 
+IconicResult iconicPaperDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
+                                const IconicOptions& options) {
+  IconicResult res;
+  res.nu = nu0;
+  // Eq. 6–8 as printed: plain squares, image 2's normals, every line.
+  const auto evaluate = [&](const PoseVector& nu) { return iconicError(map1, image2, nu, true, 0, nullptr, 1, false); };
+  IconicError e = evaluate(res.nu);
+  record(res, e);
+  // One gain for the run, from JᵀJ at ν0: k·λ_max = paper_gain (stable below 1).
+  const double lambda_max = e.overlap > 6 ? Eigen::SelfAdjointEigenSolver<Matrix6d>(e.JtJ).eigenvalues()(5) : 0.0;
+  const double k = lambda_max > 0 ? options.paper_gain / lambda_max : 0.0;
+  while (e.overlap > 6 && k > 0) {
+    if (rms(e) < options.floor_m) {  // E as small as the sensor allows
+      res.converged = true;
+      break;
+    }
+    if (res.iterations >= options.paper_max_iterations) break;
+    ++res.iterations;
+    const PoseVector next = res.nu - k * e.gradient;  // eq. 4 with its sign corrected
+    const IconicError t = evaluate(next);
+    if (t.overlap <= 6) break;  // no match left to compare
+    if (!(t.E < e.E)) {
+      // ΔE ≥ 0: keep the lower E; converged if ΔE is small.
+      res.converged = (t.E - e.E) / e.E < options.min_relative_decrease;
+      break;
+    }
+    const double decrease = (e.E - t.E) / e.E;
+    res.nu = next, e = t;
+    record(res, e);
+    if (decrease < options.min_relative_decrease) {
+      res.converged = true;
+      break;
+    }
+  }
+  finishResult(res, map1, e);  // e: the plain error at res.nu
+  return res;
+}
+
 namespace {
 
 // weightedCovariance with each line's search started at its hint (one per cell of map 1).

@@ -76,6 +76,11 @@ struct IconicOptions {
   // that the covariance counts the pixels of image 1 that map 1's lines share. Null: map 1's lines
   // are taken to share pixels as their crossings with image 2 do (docs/matching.md).
   const LocusMapper* map1_source = nullptr;
+  // The paper's descent as printed (iconicPaperDescent): its gain k = paper_gain/λ_max(JᵀJ at ν0),
+  // fixed for the run, and its own iteration cap (a fixed-gain descent needs far more iterations
+  // than the methods above).
+  double paper_gain = 1.0;
+  int paper_max_iterations = 2000;
 };
 
 struct IconicResult {
@@ -115,6 +120,38 @@ Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio = 1e-4)
 // the lines of options.strides' last stride.
 IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                    const IconicOptions& options = {});
+
+// The paper's descent as printed (eq. 4–8), with nothing added: the baseline the methods above
+// depart from. E = Σ (f₁ − g)² over the vertical lines of map 1's Known cells that meet image 2
+// (eq. 6: plain squares, no robust loss, no weights, not divided by N), ∂E/∂ν through image 2's
+// surface normal at each hit (eq. 7–8, not map 1's normals): iconicError(map1, image2, ν) with its
+// defaults, every line (stride 1).
+// - The update is ν ← ν − k·∂E/∂ν. Eq. 4 prints ν + k·∂E/∂ν, which climbs E for k > 0: a sign
+//   typo (the text calls it a descent).
+// - One scalar gain k for the whole run. The paper leaves k open; the plain rule nearest to it is
+//   k = paper_gain/λ_max(JᵀJ), JᵀJ (IconicError::JtJ) at ν0, computed once. For E = Σr² the
+//   Hessian is ≈ 2·JᵀJ, so a step multiplies the offset from the minimum along the eigenvector of
+//   λ by 1 − 2kλ: a fixed gain is stable for k < 1/λ_max. paper_gain = 1 is that bound itself
+//   (the stiffest direction's factor is −1 in the quadratic model: it does not shrink, and what
+//   E has beyond the quadratic decides whether it grows); 0.5 is the textbook safe gain, 1/L for
+//   L = 2·λ_max.
+//   The weakest direction shrinks by 1 − 2k·λ_min per step: of order λ_max/λ_min steps, and
+//   rotations (acting through lever arms of metres) against horizontal translations make that
+//   ratio large (about 1.4e4 on the caps of the tests). No rescaling of the parameters, no line
+//   search: those are iconicGradientDescent's departures.
+// - Stop rules, the paper's ("ΔE small enough, or E itself small enough") made plain, E compared
+//   as printed (each pose's sum over the lines it has, not over common lines): stop when the RMS
+//   residual √(E/N) < floor_m (converged); when the relative decrease (E_i − E_i+1)/E_i is below
+//   min_relative_decrease (converged); when E does not decrease (ΔE ≥ 0: the previous ν, the lower
+//   E, is kept; converged only if the rise is below min_relative_decrease of E, i.e. ΔE is small
+//   either way, otherwise the gain overshot); or after paper_max_iterations steps (not converged).
+//   As printed, E also rises when a line enters the overlap, which stops the descent too. A step
+//   that would leave 6 lines or fewer (E over almost no lines is no match) is not taken.
+// iterations: the steps computed (a refused last one included); rms_m, E_m2 and lines at ν0 and
+// after each step taken (E_m2 falls strictly). Covariance and degeneracy as the others', from the
+// plain error at the estimate. Deterministic.
+IconicResult iconicPaperDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
+                                const IconicOptions& options = {});
 
 // Levenberg–Marquardt on the same residuals r = z₁ − s: (JᵀJ + λ·diag JᵀJ)·δ = −Jᵀr, λ divided by 10
 // after a step that lowers the cost (over the lines both poses have) and, after one that does not,

@@ -17,6 +17,24 @@ AcceptanceConfig acceptanceFor(const RegistrationConfig& config, const Eigen::Is
   return a;
 }
 
+Matrix6d sensorPoseJacobian(const PoseVector& nu, const Eigen::Isometry3d& believed_WS_j) {
+  const Eigen::Isometry3d B = believed_WS_j;
+  const Eigen::Isometry3d base = B.inverse() * poseFromVector(nu);
+  const auto e = [&](const PoseVector& d) { return vectorFromPose(base * poseFromVector(nu + d).inverse() * B); };
+  Matrix6d A;
+  constexpr double h = 1e-6;
+  for (int k = 0; k < 6; ++k) {
+    const PoseVector d = PoseVector::Unit(k) * h;
+    A.col(k) = (e(d) - e(-d)) / (2 * h);
+  }
+  return A;
+}
+
+Matrix6d sensorPoseCovariance(const PoseVector& nu, const Matrix6d& P, const Eigen::Isometry3d& believed_WS_j) {
+  const Matrix6d A = sensorPoseJacobian(nu, believed_WS_j);
+  return A * P * A.transpose();
+}
+
 MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, const Eigen::Isometry3d& believed_WS_j) {
   const Eigen::Isometry3d T = believed_WS_j * T_WS_i.inverse() * grid_i.T_WM;
   const Eigen::Vector3d x = T.linear().col(0);

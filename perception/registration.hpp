@@ -104,6 +104,16 @@ Verification verifyHypotheses(const ElevationMap& map_i, const LocusMapper& imag
                               const std::vector<RegistrationHypothesis>& starts, double D0, const Refiner& refine,
                               const RegistrationConfig& config);
 
+// The covariance of sensor J's estimated pose (what is scored), from ν's covariance P: the
+// estimate's error as e with T̂(ν + δ) = T̂(ν)·exp(e), rx ry rz tx ty tz in sensor J's frame; to
+// first order e = A·δ with A = ∂log(B⁻¹·exp(ν)·exp(ν + δ)⁻¹·B)/∂δ (B the believed pose of sensor J,
+// central differences), so the covariance is A·P·Aᵀ. ν's translation is about the world origin, e's
+// about sensor J: a yaw error moves them differently (docs/matching.md, "Calibration"). NEES is
+// the same in either (first order: an invertible linear map).
+Matrix6d sensorPoseCovariance(const PoseVector& nu, const Matrix6d& P, const Eigen::Isometry3d& believed_WS_j);
+// A (as above): how an error δ of ν moves the estimated pose of sensor J.
+Matrix6d sensorPoseJacobian(const PoseVector& nu, const Eigen::Isometry3d& believed_WS_j);
+
 // The grid of the rover's map of view J: map I's grid carried from sensor I to where the rover
 // believes sensor J is (T_WM_J = believed_WS_J·T_WS_I⁻¹, kept gravity-aligned: its yaw and
 // translation), so that map J covers what sensor J sees as map I covers what sensor I sees.

@@ -158,6 +158,10 @@ void run(RunState& s) {
       pair["degenerate"] = reg.ran_iconic && res.degenerate;
       pair["free_directions"] = res.free_directions;
       pair["overlap"] = res.overlap;
+      // The same of sensor J's pose in its own frame (what is scored), rx ry rz tx ty tz.
+      pair["covariance_pose"] = covariance && res.covariance.allFinite()
+                                    ? matrixJson(perception::sensorPoseCovariance(reg.nu, res.covariance, believed_WS))
+                                    : nlohmann::ordered_json(nullptr);
       pair["covariance_calibrated"] = covariance && covarianceCalibrated(method);
       // The rover's verdict, made without truth, and how it scores against the truth.
       const perception::Assessment& a = reg.assessment;

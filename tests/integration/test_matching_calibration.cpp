@@ -19,6 +19,7 @@
 #include "base/random.hpp"
 #include "perception/iconic.hpp"
 #include "perception/range_edges.hpp"
+#include "perception/registration.hpp"
 #include "perception/scan_to_map.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
@@ -85,6 +86,13 @@ TEST(MatchingCalibration, WeightedCovarianceMatchesTheErrors) {
     const PoseVector e = res.nu - truth;
     const double n = nees(e, res.covariance);
     sum_weighted += n;
+    // Scored as sensor J's pose: its error e_S = log(T̂⁻¹·T) in J's frame (T̂ the estimate, T the
+    // truth) and its covariance A·P·Aᵀ (sensorPoseCovariance). NEES is invariant to first order
+    // under that linear map: the two agree to 1 %.
+    const Eigen::Isometry3d T_hat = poseFromVector(res.nu).inverse() * believed;
+    const PoseVector e_pose = vectorFromPose(T_hat.inverse() * T_J);
+    const double n_pose = nees(e_pose, sensorPoseCovariance(res.nu, res.covariance, believed));
+    EXPECT_NEAR(n_pose, n, 0.01 * n + 1e-9) << "trial " << k;
     const PoseError err = poseError(believed * T_J.inverse(), poseFromVector(res.nu));
     sum_t += err.translation_m, sum_r += err.rotation_deg;
     // The naive (JᵀWJ)⁻¹ at the same estimate: every line taken for an independent observation.
