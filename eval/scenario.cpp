@@ -341,13 +341,16 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
     for (std::size_t i = 0; i < ms->size(); ++i) {
       const std::string path = "matching.methods[" + std::to_string(i) + "]";
       const std::string_view name = reader.choice((*ms)[i], path, {"iconic", "iconic_lm", "features", "features+iconic",
-                                                                   "iconic_weighted", "features+iconic_lm", "icp_point_to_plane", "gicp", "fgr"});
+                                                                   "iconic_weighted", "features+iconic_lm", "icp_point_to_plane", "gicp", "fgr",
+                                                                   "iconic_robust", "features+iconic_robust"});
       if (name == "features") m.methods.push_back(MatchMethod::Features);
       else if (name == "iconic") m.methods.push_back(MatchMethod::Iconic);
       else if (name == "features+iconic") m.methods.push_back(MatchMethod::FeaturesIconic);
       else if (name == "iconic_lm") m.methods.push_back(MatchMethod::IconicLm);
       else if (name == "iconic_weighted") m.methods.push_back(MatchMethod::IconicWeighted);
       else if (name == "features+iconic_lm") m.methods.push_back(MatchMethod::FeaturesLm);
+      else if (name == "iconic_robust") m.methods.push_back(MatchMethod::IconicRobust);
+      else if (name == "features+iconic_robust") m.methods.push_back(MatchMethod::FeaturesIconicRobust);
       else if (name == "icp_point_to_plane") m.methods.push_back(MatchMethod::IcpPointToPlane);
       else if (name == "gicp") m.methods.push_back(MatchMethod::Gicp);
       else m.methods.push_back(MatchMethod::Fgr);
@@ -535,6 +538,8 @@ const char* matchMethodName(MatchMethod m) {
     case MatchMethod::IconicLm: return "iconic_lm";
     case MatchMethod::IconicWeighted: return "iconic_weighted";
     case MatchMethod::FeaturesLm: return "features+iconic_lm";
+    case MatchMethod::IconicRobust: return "iconic_robust";
+    case MatchMethod::FeaturesIconicRobust: return "features+iconic_robust";
     case MatchMethod::IcpPointToPlane: return "icp_point_to_plane";
     case MatchMethod::Gicp: return "gicp";
     case MatchMethod::Fgr: return "fgr";
@@ -551,6 +556,8 @@ std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m) {
     case MatchMethod::IconicLm: return R::IconicLm;
     case MatchMethod::IconicWeighted: return R::IconicWeighted;
     case MatchMethod::FeaturesLm: return R::FeaturesLm;
+    case MatchMethod::IconicRobust: return R::IconicRobust;
+    case MatchMethod::FeaturesIconicRobust: return R::FeaturesIconicRobust;
     default: return std::nullopt;
   }
 }

@@ -55,11 +55,13 @@ struct MapSpec {
 // paper's (perception::registerViews) and the Open3D peers (eval/peers/).
 enum class MatchMethod : std::uint8_t {
   Features,
-  Iconic,
-  FeaturesIconic,
+  Iconic,           // the paper's descent as printed (eq. 4–8)
+  FeaturesIconic,   // the paper's two stages
+  IconicRobust,     // our descent (docs/matching.md, "The paper's descent, and ours")
+  FeaturesIconicRobust,
   IconicLm,
   IconicWeighted,
-  FeaturesLm,       // features, then Levenberg–Marquardt from T_F
+  FeaturesLm,       // features, then Levenberg–Marquardt
   IcpPointToPlane,  // peers: Open3D's point-to-plane ICP,
   Gicp,             // generalized ICP,
   Fgr,              // fast global registration on FPFH features, refined by point-to-plane ICP

@@ -79,7 +79,7 @@ struct IconicOptions {
   // The paper's descent as printed (iconicPaperDescent): its gain k = paper_gain/λ_max(JᵀJ at ν0),
   // fixed for the run, and its own iteration cap (a fixed-gain descent needs far more iterations
   // than the methods above).
-  double paper_gain = 1.0;
+  double paper_gain = 0.5;
   int paper_max_iterations = 2000;
 };
 
@@ -133,8 +133,8 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
 //   Hessian is ≈ 2·JᵀJ, so a step multiplies the offset from the minimum along the eigenvector of
 //   λ by 1 − 2kλ: a fixed gain is stable for k < 1/λ_max. paper_gain = 1 is that bound itself
 //   (the stiffest direction's factor is −1 in the quadratic model: it does not shrink, and what
-//   E has beyond the quadratic decides whether it grows); 0.5 is the textbook safe gain, 1/L for
-//   L = 2·λ_max.
+//   E has beyond the quadratic decides whether it grows: on the caps it overshot at step 4); the
+//   default, 0.5, is the textbook safe gain, 1/L for L = 2·λ_max.
 //   The weakest direction shrinks by 1 − 2k·λ_min per step: of order λ_max/λ_min steps, and
 //   rotations (acting through lever arms of metres) against horizontal translations make that
 //   ratio large (about 1.4e4 on the caps of the tests). No rescaling of the parameters, no line

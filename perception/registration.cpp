@@ -8,7 +8,8 @@
 namespace ambler::perception {
 
 bool twoStage(RegistrationMethod method) {
-  return method == RegistrationMethod::FeaturesIconic || method == RegistrationMethod::FeaturesLm;
+  return method == RegistrationMethod::FeaturesIconic || method == RegistrationMethod::FeaturesIconicRobust ||
+         method == RegistrationMethod::FeaturesLm;
 }
 
 AcceptanceConfig acceptanceFor(const RegistrationConfig& config, const Eigen::Isometry3d& T_0) {
@@ -126,6 +127,9 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
     switch (method) {
       case RegistrationMethod::Iconic:
       case RegistrationMethod::FeaturesIconic:
+        return iconicPaperDescent(map_i, mapper, start, options);
+      case RegistrationMethod::IconicRobust:
+      case RegistrationMethod::FeaturesIconicRobust:
         return iconicGradientDescent(map_i, mapper, start, options);
       case RegistrationMethod::IconicWeighted: {
         IconicOptions weighted = options;

@@ -16,12 +16,14 @@
 namespace ambler::perception {
 
 enum class RegistrationMethod : std::uint8_t {
-  Features,        // feature matching alone: T_F
-  Iconic,          // the paper's gradient descent (eq. 4) from T_0
-  FeaturesIconic,  // the paper's two stages: the descent from T_F
-  IconicLm,        // Levenberg–Marquardt, robust, coarse to fine, from T_0
-  IconicWeighted,  // the same with residuals weighted by 1/(σ₁² + σ₂²)
-  FeaturesLm,      // two stages with our second: Levenberg–Marquardt from T_F
+  Features,              // feature matching alone: T_F
+  Iconic,                // the paper's gradient descent (eq. 4–8) as printed, from T_0
+  FeaturesIconic,        // the paper's two stages: that descent from the verified hypotheses
+  IconicRobust,          // our descent: robust cost, map 1's normals, a diagonal gain (docs/matching.md)
+  FeaturesIconicRobust,  // the two stages with it
+  IconicLm,              // Levenberg–Marquardt, robust, coarse to fine, from T_0
+  IconicWeighted,        // the same with residuals weighted by 1/(σ₁² + σ₂²)
+  FeaturesLm,            // two stages with our second: Levenberg–Marquardt
 };
 
 // Whether the method runs feature matching first, then verifies its refined hypotheses.

@@ -240,7 +240,7 @@ TEST(ExperimentMatching, QuickRunReportsEveryMethodAtTheCorners) {
   opt.out = out.dir;
   const std::string md = runMatching(opt);
   EXPECT_EQ(md, slurp(out.dir / "table.md"));
-  for (const char* method : {"features", "features+iconic", "iconic", "iconic_lm"}) {
+  for (const char* method : {"features", "features+iconic_robust", "iconic_robust", "iconic_lm"}) {
     const auto grid = section(md, std::string("### Success by initial error: ") + method);
     ASSERT_EQ(grid.size(), 3u) << method << "\n" << md;  // the header, 0.25 m and 2 m
     EXPECT_TRUE(grid[0].ends_with("| 3° | 30° |")) << grid[0];

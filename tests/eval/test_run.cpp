@@ -303,7 +303,7 @@ map:
 // within the matching issue's bound for a noisy sensor (5 cm and 0.5°), far inside the start.
 TEST(Run, MatchStageRegistersTheViewsAgainstTheTruePose) {
   const std::string yaml = twoViews("match_test", "[0, -5, 3.0], rpy_deg: [0, -30, 5]") + R"(matching:
-  methods: [iconic, iconic_lm]
+  methods: [iconic_robust, iconic_lm]
   initial_error: {xyz_m: [0.2, -0.2, 0.05], rpy_deg: [0, 0, 3]}
 )";
   const Scenario sc = parseScenario(yaml, "inline.yaml");

@@ -35,7 +35,7 @@ map:
   region: {x_m: [-5, 5], y_m: [-3, 8]}
   baseline: none
 matching:
-  methods: [features, features+iconic, iconic, iconic_lm, iconic_weighted]
+  methods: [features, features+iconic_robust, iconic_robust, iconic_lm, iconic_weighted]
   initial_error: )" + initial_error + "\n";
 }
 
@@ -81,7 +81,7 @@ TEST(Matching, FeaturesHandleThePapersCase) {
     if (method == "features") {
       EXPECT_LT(t, 0.10);
       EXPECT_LT(r, 1.0);
-    } else if (method == "features+iconic") {
+    } else if (method == "features+iconic_robust") {
       EXPECT_LT(t, 0.05);
       EXPECT_LT(r, 0.5);
     }
@@ -95,7 +95,7 @@ TEST(Matching, FeaturesHandleThePapersCase) {
 TEST(Matching, PeersRecoverTheRelativePose) {
   for (const char* error : {"{xyz_m: [0.2, 0.2, 0.1], rpy_deg: [0, 0, 3]}", "{xyz_m: [1.6, -1.2, 0.0], rpy_deg: [0, 0, 30]}"}) {
     std::string text = scenario(false, error);
-    const std::string from = "methods: [features, features+iconic, iconic, iconic_lm, iconic_weighted]";
+    const std::string from = "methods: [features, features+iconic_robust, iconic_robust, iconic_lm, iconic_weighted]";
     text.replace(text.find(from), from.size(), "methods: [icp_point_to_plane, gicp, fgr]");
     const Scenario sc = parseScenario(text, "inline.yaml");
     test::TempDir run;

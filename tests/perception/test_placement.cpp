@@ -113,7 +113,7 @@ TEST(Placement, AReverseStepsSigmaIsThePlacementsSpread) {
   std::normal_distribution<double> n01;
   const int draws = 20000;
   const MapGrid& g = map.grid();
-  std::vector<int> cells{0, g.cols - 1, (g.rows / 2) * g.cols + g.cols / 2, (g.rows - 1) * g.cols + 3, g.cells() - 1};
+  std::vector<int> cells{0, g.cols - 1, (g.rows / 2) * g.cols + g.cols / 2, (g.rows - 1) * g.cols + 3, int(g.cells()) - 1};
   std::vector<double> sum2(cells.size(), 0.0);
   const Eigen::Isometry3d P0 = p[0].T_WS;
   for (int k = 0; k < draws; ++k) {
