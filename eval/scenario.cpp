@@ -606,7 +606,9 @@ perception::LocusConfig locusConfig(const Scenario& sc) {
   return c;
 }
 
-bool covarianceCalibrated(MatchMethod m) { return m == MatchMethod::IconicWeighted; }
+bool covarianceCalibrated(MatchMethod m, const perception::SensorModel& sensor) {
+  return m == MatchMethod::IconicWeighted && sensor.quantization_m == 0;
+}
 
 perception::RegistrationConfig registrationConfig(const Scenario& sc) {
   perception::RegistrationConfig c;

@@ -71,9 +71,12 @@ std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m);
 // The scenario's name of a method ("features+iconic"; in file names, eval/match_figures.hpp's
 // methodFileName).
 const char* matchMethodName(MatchMethod m);
-// Whether the method's covariance is calibrated (its NEES tested against χ²₆: docs/matching.md,
-// "Calibration"): iconic_weighted's alone. The merge propagates only calibrated covariances.
-bool covarianceCalibrated(MatchMethod m);
+// Whether the method's covariance is calibrated (its mean NEES within [4.5, 7.5] across three
+// terrain kinds, tests/integration/test_matching_calibration.cpp; docs/matching.md,
+// "Calibration"): iconic_weighted's, and only with a sensor that does not quantise its ranges (the
+// ERIM's 7.6 cm counts make errors that neighbouring returns share, and its covariance
+// overconfident: mean NEES 9.5). The merge propagates only calibrated covariances.
+bool covarianceCalibrated(MatchMethod m, const perception::SensorModel& sensor);
 
 struct MatchingSpec {
   std::vector<std::pair<int, int>> pairs;  // (I, J): view J registered against view I

@@ -162,7 +162,7 @@ void run(RunState& s) {
       pair["covariance_pose"] = covariance && res.covariance.allFinite()
                                     ? matrixJson(perception::sensorPoseCovariance(reg.nu, res.covariance, believed_WS))
                                     : nlohmann::ordered_json(nullptr);
-      pair["covariance_calibrated"] = covariance && covarianceCalibrated(method);
+      pair["covariance_calibrated"] = covariance && covarianceCalibrated(method, sc.sensor);
       // The rover's verdict, made without truth, and how it scores against the truth.
       const perception::Assessment& a = reg.assessment;
       pair["accepted"] = a.accepted;
@@ -233,7 +233,7 @@ void run(RunState& s) {
       registered.push_back({name, perception::poseFromVector(reg.nu).inverse() * believed_WS, res.rms_m});
       PairEstimate estimate{i, j, method, T_est, reg.nu, std::nullopt};
       if (covariance && res.covariance.allFinite()) estimate.covariance = res.covariance;
-      estimate.covariance_calibrated = covarianceCalibrated(method);
+      estimate.covariance_calibrated = covarianceCalibrated(method, sc.sensor);
       estimate.accepted = a.accepted;
       estimate.T_WS_i = vi.T_WS;
       estimate.believed_WS_j = believed_WS;
@@ -247,6 +247,7 @@ void run(RunState& s) {
       m["accepted"] = a.accepted;
       m["false_accept"] = a.accepted && !success;
       m["reject_reasons"] = a.reject_reasons;
+      m["assessment"] = assessmentJson(a);
       m["iterations"] = reg.iterations;
       m["time_s"] = seconds;
       m["initial_translation_error_m"] = start.translation_m;
