@@ -40,10 +40,13 @@ long knownCells(const ElevationMap& map) {
 
 Assessment assessRegistration(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
                               const Eigen::Isometry3d& believed_WS, const Matrix6d* covariance,
-                              const Degeneracy* degeneracy_at_nu, const AcceptanceConfig& config) {
+                              const Degeneracy* degeneracy_at_nu, const AcceptanceConfig& config,
+                              const std::vector<double>* residuals) {
   Assessment a;
   // The lines' agreement at ν.
-  const std::vector<double> u = normalizedResiduals(map1, image2, nu);
+  const std::vector<double> u = residuals && residuals->size() == std::size_t(map1.grid().cells())
+                                    ? *residuals
+                                    : normalizedResiduals(map1, image2, nu);
   long inliers = 0;
   double sum_u2 = 0;
   for (const double x : u) {

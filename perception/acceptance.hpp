@@ -76,10 +76,12 @@ double correctionMahalanobis2(const Eigen::Isometry3d& believed_WS, const Eigen:
 // correction under the prior, the surface's degeneracy at ν (the method's, or if null degeneracy()
 // of JᵀJ there) and, when
 // the method gives one, whether its covariance is positive definite. Every failed test is one
-// reason. Deterministic.
+// reason. residuals: the lines' normalized residuals at ν if the method kept them
+// (IconicResult::residuals_u), else they are evaluated. Deterministic.
 Assessment assessRegistration(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
                               const Eigen::Isometry3d& believed_WS, const Matrix6d* covariance,
-                              const Degeneracy* degeneracy, const AcceptanceConfig& config);
+                              const Degeneracy* degeneracy, const AcceptanceConfig& config,
+                              const std::vector<double>* residuals = nullptr);
 
 // Verification: the robust cost Σ c²·ln(1 + u²/c²) of each hypothesis's normalized residuals
 // (normalizedResiduals, one vector per hypothesis, all on map 1's cells) over the lines every

@@ -225,7 +225,7 @@ struct LineSamples {
 // none, and the walk down the line from its top is spared.
 LineSamples sampleLines(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, bool with_gradient,
                         const std::vector<Eigen::Vector3d>* reference_normals, int stride, bool weighted,
-                        std::vector<int>* hints = nullptr) {
+                        std::vector<int>* hints = nullptr, std::vector<double>* model_u = nullptr) {
   const MapGrid& grid = map1.grid();
   const LineModel model(nu, with_gradient);
   LineSamples out;
@@ -242,6 +242,11 @@ LineSamples sampleLines(const ElevationMap& map1, const LocusMapper& image2, con
         sample.col = c, sample.diff = l.diff, sample.u = l.u;
         sample.has_J = with_gradient && model.jacobian(image2, reference_normals, r * grid.cols + c, l, sample.J);
         if (sample.has_J) sample.J /= l.sigma;  // the normalized residual's (σ = 1 unweighted)
+        if (model_u) {  // r/σ with the model's σ, σ² = σ₁² + σ₂² (normalizedResiduals'), per cell
+          const double s1 = map1.sigma()(r, c);
+          const double s = weighted ? l.sigma : std::sqrt(std::max(s1 * s1 + l.hit.sigma * l.hit.sigma, kSigmaFloor2));
+          if (std::isfinite(s)) (*model_u)[std::size_t(r) * grid.cols + c] = l.diff / s;
+        }
       }
     }
   });
@@ -300,10 +305,14 @@ IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, con
   return sumLines(sampleLines(map1, image2, nu, with_gradient, reference_normals, stride, weighted), cauchy_c);
 }
 
-std::vector<double> normalizedResiduals(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu) {
+std::vector<double> normalizedResiduals(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
+                                        int stride, const std::vector<int>* hints) {
   const MapGrid& g = map1.grid();
   std::vector<double> u(std::size_t(g.cells()), std::numeric_limits<double>::quiet_NaN());
-  const LineSamples lines = sampleLines(map1, image2, nu, false, nullptr, 1, true);
+  std::vector<int> start;
+  if (hints && hints->size() == std::size_t(g.cells())) start = *hints;
+  const LineSamples lines =
+      sampleLines(map1, image2, nu, false, nullptr, std::max(1, stride), true, start.empty() ? nullptr : &start);
   for (int r = 0; r < g.rows; ++r)
     for (const LineSample& l : lines.rows[std::size_t(r)]) u[std::size_t(r) * g.cols + l.col] = l.u;
   return u;
@@ -364,7 +373,10 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
     }
     k *= 4;  // undo the last halving and try a longer step next time
   }
-  finishResult(res, map1, sumLines(sampleLines(map1, image2, res.nu, true, nullptr, 1, false, &hints), 0.0));
+  res.residuals_u.assign(std::size_t(map1.grid().cells()), std::numeric_limits<double>::quiet_NaN());
+  finishResult(res, map1,
+               sumLines(sampleLines(map1, image2, res.nu, true, nullptr, 1, false, &hints, &res.residuals_u), 0.0));
+  res.hints = std::move(hints);
   return res;
 }
 
@@ -505,7 +517,10 @@ IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMappe
   double c = 0;
   std::vector<int> hints(std::size_t(map1.grid().cells()), -1);
   IconicResult res = levenbergMarquardt(map1, image2, nu0, options, referenceNormals(map1), false, c, hints);
-  finishResult(res, map1, sumLines(sampleLines(map1, image2, res.nu, true, nullptr, 1, false, &hints), 0.0));
+  res.residuals_u.assign(std::size_t(map1.grid().cells()), std::numeric_limits<double>::quiet_NaN());
+  finishResult(res, map1,
+               sumLines(sampleLines(map1, image2, res.nu, true, nullptr, 1, false, &hints, &res.residuals_u), 0.0));
+  res.hints = std::move(hints);
   return res;
 }
 
@@ -518,7 +533,9 @@ IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2,
   // Whether the surface constrains every motion is a matter of its shape, not of the σ's: the
   // unweighted JᵀJ decides it (weights that differ by 100 between level ground and a rock's
   // flank would otherwise name the rock's directions free).
-  const IconicError e = sumLines(sampleLines(map1, image2, res.nu, true, &normals, 1, false, &hints), 0.0);
+  res.residuals_u.assign(std::size_t(map1.grid().cells()), std::numeric_limits<double>::quiet_NaN());
+  const IconicError e =
+      sumLines(sampleLines(map1, image2, res.nu, true, &normals, 1, false, &hints, &res.residuals_u), 0.0);
   res.overlap = e.overlap;
   const MapGrid& g = map1.grid();
   const Degeneracy d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell));
@@ -527,6 +544,7 @@ IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2,
   if (e.overlap > 6 && !d.degenerate)
     res.covariance = covarianceWithHints(map1, image2, res.nu, c, normals, options.map1_source, &hints);
   else res.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
+  res.hints = std::move(hints);
   return res;
 }
 

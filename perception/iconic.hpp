@@ -53,7 +53,10 @@ IconicError iconicError(const ElevationMap& map1, const LocusMapper& image2, con
 // Each line's normalized residual u = r/σ at ν, σ² = σ₁² + σ₂² (iconicError's weighted form), per
 // cell of map 1 in row-major order; NaN where the cell or the line's crossing with image 2 is not
 // Known. What verification and acceptance read (perception/acceptance.hpp). Deterministic.
-std::vector<double> normalizedResiduals(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu);
+// stride: the lines of every stride-th row and column only (NaN elsewhere); hints (IconicResult::
+// hints near ν), if given and not empty, start the searches (the values are the same).
+std::vector<double> normalizedResiduals(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
+                                        int stride = 1, const std::vector<int>* hints = nullptr);
 
 // Map 1's unit surface normals (row-major per cell; NaN where the cell or its neighbours are not
 // known, and there image 2's normal at the hit is used): from central differences of the known
@@ -98,6 +101,12 @@ struct IconicResult {
   // parameters ("rx", "ry", "rz", "tx", "ty", "tz") that dominate each weak direction.
   bool degenerate = false;
   std::vector<std::string> free_directions;
+  // Each line's last bracket in image 2 at the estimate (per cell of map 1; −1: none; empty when
+  // the method keeps none): a later evaluation near ν starts its searches there.
+  std::vector<int> hints;
+  // Each line's normalized residual at the estimate, as normalizedResiduals(map1, image2, nu)
+  // gives it (empty when the method does not keep them): the verdict reads them.
+  std::vector<double> residuals_u;
 };
 
 struct Degeneracy {

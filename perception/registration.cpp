@@ -58,7 +58,7 @@ Verification verifyHypotheses(const ElevationMap& map_i, const LocusMapper& imag
     for (RegistrationHypothesis h : starts) {
       const IconicResult r = refine(h.nu0, coarse);
       h.stage = "screen", h.nu = r.nu, h.iterations = r.iterations;
-      residuals.push_back(normalizedResiduals(map_i, image_j, h.nu));
+      residuals.push_back(normalizedResiduals(map_i, image_j, h.nu, config.screen_stride, &r.hints));
       hs.push_back(h);
     }
     const std::vector<double> costs = commonOverlapCosts(residuals, c, nullptr);
@@ -77,7 +77,9 @@ Verification verifyHypotheses(const ElevationMap& map_i, const LocusMapper& imag
   results.push_back(refine(PoseVector::Zero(), config.iconic));
   hs.push_back({"T_0", "refine", PoseVector::Zero(), results.back().nu, D0, 0, results.back().iterations});
   residuals.clear();
-  for (const IconicResult& r : results) residuals.push_back(normalizedResiduals(map_i, image_j, r.nu));
+  for (const IconicResult& r : results)
+    residuals.push_back(r.residuals_u.size() == std::size_t(map_i.grid().cells()) ? r.residuals_u
+                                                                                   : normalizedResiduals(map_i, image_j, r.nu));
   const std::vector<double> costs = commonOverlapCosts(residuals, c, &v.common_lines);
   std::size_t kept = 0;
   for (std::size_t k = 0; k < results.size(); ++k) {
@@ -158,7 +160,8 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
   out.nu = out.iconic.nu;
   out.iterations = out.iconic.iterations;
   const Degeneracy d{out.iconic.degenerate, out.iconic.free_directions};
-  out.assessment = assessRegistration(map_i, mapper, out.nu, believed, &out.iconic.covariance, &d, config.acceptance);
+  out.assessment =
+      assessRegistration(map_i, mapper, out.nu, believed, &out.iconic.covariance, &d, config.acceptance, &out.iconic.residuals_u);
   return out;
 }
 

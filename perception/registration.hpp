@@ -90,7 +90,7 @@ struct RegistrationResult {
 
 // Verification (docs/matching.md, "Verification"): each start (feature matching's distinct
 // pairings, best first, in the believed frame: nu0, start, D_m) is screened by `refine` on the
-// lines of every config.screen_stride-th cell; the one of lowest robust cost over the lines all
+// lines of every config.screen_stride-th cell; the one of lowest robust cost over the (coarse) lines all
 // screened estimates have (commonOverlapCosts, c = acceptance.inlier_sigmas) is refined in full
 // from where its screen ended, and so is T_0 (ν = 0); of the two the lower cost over their common
 // lines is kept, the pairing's on a tie. So the result is never one that the cost rates worse than
