@@ -132,6 +132,8 @@ printf "$two_views"'matching: {pairs: [[0, 2]]}\n' >pair.yaml
 expect_error matching_pair_out_of_range 'pair\.yaml: matching\.pairs\[0\]: expected two view indices in \[0, 1\]' run pair.yaml --out out
 printf "$two_views"'matching: {pairs: [[1, 1]]}\n' >self.yaml
 expect_error matching_self_pair 'self\.yaml: matching\.pairs\[0\]: a view cannot be registered against itself' run self.yaml --out out
+printf "$two_views"'matching: {draw_initial_error: true, initial_error: {xyz_m: [0.1, 0, 0]}}\n' >drawn.yaml
+expect_error matching_drawn_and_given_error 'drawn\.yaml: matching\.draw_initial_error: true draws the initial error from the odometry model; remove initial_error' run drawn.yaml --out out
 printf 'name: x\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}, {xyz_m: [1, 0, 1]}, {xyz_m: [2, 0, 1]}]\nmap: {}\nmatching: {pairs: [[0, 1]]}\nmerge: {}\n' >link.yaml
 expect_error merge_not_linked 'link\.yaml: merge\.poses: matched, but view 2 is not linked to view 0' run link.yaml --out out
 printf 'name: x\nterrain: {kind: plane}\nviews: [{xyz_m: [0,0,1]}]\nmap: {}\nfootfall: {region: {x_m: [8, 9], y_m: [0, 1]}}\n' >ff.yaml
