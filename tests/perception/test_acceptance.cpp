@@ -192,12 +192,16 @@ TEST(Acceptance, TooLittleOverlapIsRefused) {
 }
 
 
-// Verification with a planted wrong pairing: feature matching's T_F put 1 m and 20° off the truth,
-// T_0 within LM's reach (0.14 m, 1.5°). The screen finds the pairing's cost high, and the kept
-// result is T_0's refinement at the truth (to test_iconic's 5 mm and 0.05°); it is accepted.
-TEST(Verification, APlantedWrongPairingIsNotKept) {
-  CapsScene s;
-  const Eigen::Isometry3d E = Eigen::Translation3d(0.1, -0.08, 0.05) * Eigen::AngleAxisd(1.5 * kDeg, Eigen::Vector3d::UnitZ());
+// Verification on the caps with a planted wrong pairing: feature matching's T_F put 0.8 m, 0.6 m
+// and 20° off the truth, the rover believing it is E off. Returns the verification by LM, its
+// error against the truth and the verdict on what it kept.
+struct PlantedRun {
+  Verification v;
+  PoseError error;
+  Assessment verdict;
+};
+
+PlantedRun plantedWrongPairing(CapsScene& s, const Eigen::Isometry3d& E) {
   const Eigen::Isometry3d believed = s.T_WS * E;
   const LocusMapper m = s.mapper(believed);
   const PoseVector truth = s.correction(believed);
@@ -206,37 +210,36 @@ TEST(Verification, APlantedWrongPairingIsNotKept) {
   RegistrationConfig config;
   config.acceptance = wide();
   const Refiner lm = [&](const PoseVector& start, const IconicOptions& o) { return iconicLevenbergMarquardt(s.map1, m, start, o); };
-  const Verification v = verifyHypotheses(s.map1, m, {{"T_F", "screen", wrong, {}, 1.0, 0, 0}}, 2.0, lm, config);
+  PlantedRun run;
+  run.v = verifyHypotheses(s.map1, m, {{"T_F", "screen", wrong, {}, 1.0, 0, 0}}, 2.0, lm, config);
+  run.error = poseError(poseFromVector(truth), poseFromVector(run.v.result.nu));
+  run.verdict = assessRegistration(s.map1, m, run.v.result.nu, believed, &run.v.result.covariance, nullptr, config.acceptance);
+  return run;
+}
+
+// T_0 within LM's reach (0.14 m, 1.5°): the screen finds the pairing's cost high, and the kept
+// result is T_0's refinement at the truth (to test_iconic's 5 mm and 0.05°); it is accepted.
+TEST(Verification, APlantedWrongPairingIsNotKept) {
+  CapsScene s;
+  const PlantedRun r = plantedWrongPairing(s, Eigen::Translation3d(0.1, -0.08, 0.05) * Eigen::AngleAxisd(1.5 * kDeg, Eigen::Vector3d::UnitZ()));
+  const Verification& v = r.v;
   ASSERT_EQ(v.hypotheses.size(), 3u);  // the screen, then the pairing and T_0 refined
-  EXPECT_EQ(v.hypotheses[v.chosen].start, "T_0");
-  const PoseError err = poseError(poseFromVector(truth), poseFromVector(v.result.nu));
-  EXPECT_LT(err.translation_m, 5e-3);
-  EXPECT_LT(err.rotation_deg, 0.05);
+  EXPECT_EQ(v.hypotheses[std::size_t(v.chosen)].start, "T_0");
+  EXPECT_LT(r.error.translation_m, 5e-3);
+  EXPECT_LT(r.error.rotation_deg, 0.05);
   // Never worse than refining T_0 by its own cost: the kept one is the lower of the two.
   EXPECT_LE(v.hypotheses[std::size_t(v.chosen)].cost, v.hypotheses[2].cost);
   EXPECT_GT(v.hypotheses[1].cost, v.hypotheses[2].cost);
-  const Assessment a = assessRegistration(s.map1, m, v.result.nu, believed, &v.result.covariance, nullptr, config.acceptance);
-  EXPECT_TRUE(a.accepted) << (a.reject_reasons.empty() ? "" : a.reject_reasons.front());
+  EXPECT_TRUE(r.verdict.accepted) << (r.verdict.reject_reasons.empty() ? "" : r.verdict.reject_reasons.front());
 }
 
 // The same wrong pairing, and T_0 out of LM's reach (1.5 m and 25° off): neither refinement finds
 // the truth, and the rover says so (accepted false), whichever it keeps.
 TEST(Verification, WhenEveryStartIsWrongTheRoverSaysSo) {
   CapsScene s;
-  const Eigen::Isometry3d E = Eigen::Translation3d(1.2, -0.9, 0.1) * Eigen::AngleAxisd(25 * kDeg, Eigen::Vector3d::UnitZ());
-  const Eigen::Isometry3d believed = s.T_WS * E;
-  const LocusMapper m = s.mapper(believed);
-  const PoseVector truth = s.correction(believed);
-  PoseVector wrong = truth;
-  wrong(2) += 20 * kDeg, wrong(3) += 0.8, wrong(4) -= 0.6;
-  RegistrationConfig config;
-  config.acceptance = wide();
-  const Refiner lm = [&](const PoseVector& start, const IconicOptions& o) { return iconicLevenbergMarquardt(s.map1, m, start, o); };
-  const Verification v = verifyHypotheses(s.map1, m, {{"T_F", "screen", wrong, {}, 1.0, 0, 0}}, 2.0, lm, config);
-  const PoseError err = poseError(poseFromVector(truth), poseFromVector(v.result.nu));
-  ASSERT_GT(err.translation_m, 0.05) << "the premise: no start reaches the truth";
-  const Assessment a = assessRegistration(s.map1, m, v.result.nu, believed, &v.result.covariance, nullptr, config.acceptance);
-  EXPECT_FALSE(a.accepted) << err.translation_m << " m, " << err.rotation_deg << " deg";
+  const PlantedRun r = plantedWrongPairing(s, Eigen::Translation3d(1.2, -0.9, 0.1) * Eigen::AngleAxisd(25 * kDeg, Eigen::Vector3d::UnitZ()));
+  ASSERT_GT(r.error.translation_m, 0.05) << "the premise: no start reaches the truth";
+  EXPECT_FALSE(r.verdict.accepted) << r.error.translation_m << " m, " << r.error.rotation_deg << " deg";
 }
 
 }  // namespace
