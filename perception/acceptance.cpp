@@ -8,11 +8,6 @@
 
 namespace ambler::perception {
 
-PriorSigma OdometryModel::at(double distance_m) const {
-  const double d = std::max(0.0, distance_m);
-  return {std::max(translation_floor_m, translation_per_m * d), std::max(heading_floor_deg, heading_deg_per_m * d)};
-}
-
 double correctionMahalanobis2(const Eigen::Isometry3d& believed_WS, const Eigen::Isometry3d& estimated_WS,
                               const PriorSigma& prior) {
   const Eigen::Isometry3d delta = believed_WS.inverse() * estimated_WS;

@@ -4,6 +4,7 @@
 // robust iconic cost over the lines they all have, and the rover's verdict on a registration.
 // Onboard code: nothing here sees a true pose.
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -30,7 +31,10 @@ struct OdometryModel {
   double translation_floor_m = 0.05;
   double heading_deg_per_m = 2.0;
   double heading_floor_deg = 0.5;
-  PriorSigma at(double distance_m) const;
+  PriorSigma at(double distance_m) const {
+    const double d = distance_m > 0 ? distance_m : 0.0;
+    return {std::max(translation_floor_m, translation_per_m * d), std::max(heading_floor_deg, heading_deg_per_m * d)};
+  }
 };
 
 // The thresholds of the verdict and their derivation (docs/matching.md):
