@@ -226,7 +226,7 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
     SuccessGrid h;
     const std::string name = matchMethodName(spec.methods[m]);
     h.title = sc.name + ": " + name;
-    h.subtitle = criterion + "; median error; FA k: k false accepts";
+    h.subtitle = criterion + "\nin a cell: successes/trials; median error; acc: accepted; FA: false accepts";
     h.row_axis = "initial translation";
     h.col_axis = g.vertical_axis ? "initial rotation (yaw)" : "initial rotation (about a random axis)";
     for (const double v : g.translation_m) h.row_labels.push_back(numberText(v) + " m");
@@ -242,7 +242,7 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
         std::snprintf(buf, sizeof buf, med < 0.1 ? "%.1f cm" : "%.2f m", med < 0.1 ? 100 * med : med);
         note = buf;
       }
-      if (t.false_accept[m][c] > 0) note += " FA " + std::to_string(t.false_accept[m][c]);
+      note += "\nacc " + std::to_string(t.accepted[m][c]) + " FA " + std::to_string(t.false_accept[m][c]);
       h.notes.push_back(note);
       b.rate.push_back(t.n[m][c] ? t.ok[m][c] / double(t.n[m][c]) : 0.0);
     }

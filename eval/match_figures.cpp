@@ -372,15 +372,31 @@ void centred(cv::Mat& img, const std::string& s, cv::Point centre, double scale,
 
 }  // namespace
 
+namespace {
+
+// A text's lines ('\n' between them; none for an empty text).
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  if (text.empty()) return out;
+  std::size_t b = 0;
+  for (std::size_t e; (e = text.find('\n', b)) != std::string::npos; b = e + 1) out.push_back(text.substr(b, e - b));
+  out.push_back(text.substr(b));
+  return out;
+}
+
+}  // namespace
+
 cv::Mat successHeatmap(const SuccessGrid& g, int width, int height) {
   const std::size_t rows = g.row_labels.size(), cols = g.col_labels.size();
   if (g.successes.size() != rows * cols || g.trials.size() != rows * cols ||
       (!g.notes.empty() && g.notes.size() != rows * cols))
     throw std::invalid_argument("successHeatmap: successes, trials and notes must have rows x cols entries");
-  const int left = 110, top = 84, bottom = 62, right = 20;
+  const std::vector<std::string> subtitle = lines(g.subtitle);
+  const int left = 110, top = 84 + 16 * std::max(0, int(subtitle.size()) - 1), bottom = 62, right = 20;
   cv::Mat img(height, width, CV_8UC3, kPaper);
   centred(img, g.title, {width / 2, 20}, 0.7, kInk, 2);
-  centred(img, g.subtitle, {width / 2, 46}, 0.45, kInk);
+  for (std::size_t i = 0; i < subtitle.size(); ++i)
+    centred(img, subtitle[i], {width / 2, 44 + 16 * int(i)}, i ? 0.4 : 0.45, kInk);
   const int cw = (width - left - right) / int(std::max<std::size_t>(1, cols));
   const int ch = (height - top - bottom) / int(std::max<std::size_t>(1, rows));
   const double text = std::clamp(std::min(cw / 110.0, ch / 60.0), 0.35, 0.7);
@@ -396,10 +412,15 @@ cv::Mat successHeatmap(const SuccessGrid& g, int width, int height) {
       cv::rectangle(img, {x0, y0, cw + 1, ch + 1}, kPaper, 2);
       if (!n) continue;
       const cv::Scalar ink = f > 0.5 ? kPaper : kInk;
-      const bool note = !g.notes.empty() && !g.notes[k].empty();
-      centred(img, std::to_string(g.successes[k]) + "/" + std::to_string(n),
-              {x0 + cw / 2, y0 + ch / 2 - (note ? int(14 * text) : 0)}, text, ink, text > 0.5 ? 2 : 1);
-      if (note) centred(img, g.notes[k], {x0 + cw / 2, y0 + ch / 2 + int(22 * text)}, 0.65 * text, ink);
+      // "k/n" and the note's lines under it, the block centred in the cell.
+      const std::vector<std::string> note = g.notes.empty() ? std::vector<std::string>{} : lines(g.notes[k]);
+      const int first = int(36 * text), line = int(22 * text);
+      const int block = note.empty() ? 0 : first + line * int(note.size() - 1);  // "k/n"'s centre to the last line's
+      const int y = y0 + ch / 2 - block / 2;
+      centred(img, std::to_string(g.successes[k]) + "/" + std::to_string(n), {x0 + cw / 2, y}, text, ink,
+              text > 0.5 ? 2 : 1);
+      for (std::size_t l = 0; l < note.size(); ++l)
+        centred(img, note[l], {x0 + cw / 2, y + first + line * int(l)}, 0.65 * text, ink);
     }
   }
   for (std::size_t j = 0; j < cols; ++j)

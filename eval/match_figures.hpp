@@ -95,11 +95,11 @@ void writePairPictures(const std::filesystem::path& dir, int i, int j, const per
 
 // A grid of success rates over initial errors (a convergence basin): row 0 at the bottom.
 struct SuccessGrid {
-  std::string title, subtitle;   // the method; what a cell shows (criterion, trials)
+  std::string title, subtitle;   // the method; what a cell shows (criterion, trials; '\n' between lines)
   std::string row_axis, col_axis;
   std::vector<std::string> row_labels, col_labels;
   std::vector<int> successes, trials;  // row-major; a cell of 0 trials is left blank
-  std::vector<std::string> notes;      // row-major: a second line under "k/n" (empty: none)
+  std::vector<std::string> notes;      // row-major: lines ('\n' between) under "k/n" (empty: none)
 };
 
 // One cell per initial error, filled from light grey (no success) to blue (all), "k/n" in it and

@@ -9,6 +9,13 @@
 
 namespace ambler::eval {
 
+namespace {
+
+// The methods whose iconic stage is the weighted LM: they read the weighted map I.
+bool weightedMethod(MatchMethod m) { return m == MatchMethod::IconicWeighted || m == MatchMethod::FeaturesIconicWeighted; }
+
+}  // namespace
+
 PairRegistration::PairRegistration(const perception::ScanMap& view_i, const Eigen::Isometry3d& T_WS_i,
                                    const perception::ScanMap& view_j, const Eigen::Isometry3d& T_WS_j,
                                    perception::RegistrationConfig config, const std::vector<MatchMethod>& methods)
@@ -21,9 +28,10 @@ PairRegistration::PairRegistration(const perception::ScanMap& view_i, const Eige
   // The weighted method's σ_z has the footprint's term: the two views smooth the terrain over
   // footprints of different size and shape, so between their maps that error is noise. Its map I,
   // and the mapper map I was made with (the pixels of image I that map I's lines share).
-  if (std::find(methods.begin(), methods.end(), MatchMethod::IconicWeighted) != methods.end()) {
+  if (std::any_of(methods.begin(), methods.end(), weightedMethod)) {
     weighted_config_ = config_;
     weighted_config_.locus.footprint_sigma = true;
+    weighted_config_.feature_locus = config_.locus;  // feature matching reads the plain maps
     const perception::Raster<std::uint8_t>* edges = i_.edges ? &*i_.edges : nullptr;
     weighted_map_i_ = perception::LocusMapper(i_.image, edges, weighted_config_.locus, i_.map.grid().T_WM)
                           .map(i_.map.grid());
@@ -75,11 +83,12 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
   image.T_WS = out.believed_WS;
   const perception::MapGrid grid_j = perception::believedGrid(map_i_.grid(), T_WS_i_, out.believed_WS);
   Stopwatch t;
-  const bool weighted = method == MatchMethod::IconicWeighted;
+  const bool weighted = weightedMethod(method);
   perception::RegistrationConfig config = weighted ? weighted_config_ : config_;
   config.acceptance = perception::acceptanceFor(config, T_0);  // this pair's prior
   out.reg = perception::registerViews(weighted ? *weighted_map_i_ : map_i_, image, j_.edges ? &*j_.edges : nullptr,
-                                      grid_j, *paper, config, source_i_ ? &*source_i_ : nullptr);
+                                      grid_j, *paper, config, source_i_ ? &*source_i_ : nullptr,
+                                      weighted ? &map_i_ : nullptr);
   out.seconds = t.seconds();
   out.T_est = T_WS_i_.inverse() * perception::poseFromVector(out.reg.nu).inverse() * out.believed_WS;
   out.error = perception::poseError(T_IJ_, out.T_est);

@@ -342,7 +342,7 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
       const std::string path = "matching.methods[" + std::to_string(i) + "]";
       const std::string_view name = reader.choice((*ms)[i], path, {"iconic", "iconic_lm", "features", "features+iconic",
                                                                    "iconic_weighted", "features+iconic_lm", "icp_point_to_plane", "gicp", "fgr",
-                                                                   "iconic_robust", "features+iconic_robust"});
+                                                                   "iconic_robust", "features+iconic_robust", "features+iconic_weighted"});
       if (name == "features") m.methods.push_back(MatchMethod::Features);
       else if (name == "iconic") m.methods.push_back(MatchMethod::Iconic);
       else if (name == "features+iconic") m.methods.push_back(MatchMethod::FeaturesIconic);
@@ -351,6 +351,7 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
       else if (name == "features+iconic_lm") m.methods.push_back(MatchMethod::FeaturesLm);
       else if (name == "iconic_robust") m.methods.push_back(MatchMethod::IconicRobust);
       else if (name == "features+iconic_robust") m.methods.push_back(MatchMethod::FeaturesIconicRobust);
+      else if (name == "features+iconic_weighted") m.methods.push_back(MatchMethod::FeaturesIconicWeighted);
       else if (name == "icp_point_to_plane") m.methods.push_back(MatchMethod::IcpPointToPlane);
       else if (name == "gicp") m.methods.push_back(MatchMethod::Gicp);
       else m.methods.push_back(MatchMethod::Fgr);
@@ -543,6 +544,7 @@ const char* matchMethodName(MatchMethod m) {
     case MatchMethod::IcpPointToPlane: return "icp_point_to_plane";
     case MatchMethod::Gicp: return "gicp";
     case MatchMethod::Fgr: return "fgr";
+    case MatchMethod::FeaturesIconicWeighted: return "features+iconic_weighted";
   }
   return "?";
 }
@@ -558,6 +560,7 @@ std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m) {
     case MatchMethod::FeaturesLm: return R::FeaturesLm;
     case MatchMethod::IconicRobust: return R::IconicRobust;
     case MatchMethod::FeaturesIconicRobust: return R::FeaturesIconicRobust;
+    case MatchMethod::FeaturesIconicWeighted: return R::FeaturesIconicWeighted;
     default: return std::nullopt;
   }
 }
@@ -607,7 +610,7 @@ perception::LocusConfig locusConfig(const Scenario& sc) {
 }
 
 bool covarianceCalibrated(MatchMethod m, const perception::SensorModel& sensor) {
-  return m == MatchMethod::IconicWeighted && sensor.quantization_m == 0;
+  return (m == MatchMethod::IconicWeighted || m == MatchMethod::FeaturesIconicWeighted) && sensor.quantization_m == 0;
 }
 
 perception::RegistrationConfig registrationConfig(const Scenario& sc) {

@@ -65,6 +65,7 @@ enum class MatchMethod : std::uint8_t {
   IcpPointToPlane,  // peers: Open3D's point-to-plane ICP,
   Gicp,             // generalized ICP,
   Fgr,              // fast global registration on FPFH features, refined by point-to-plane ICP
+  FeaturesIconicWeighted,  // features, then the weighted LM
 };
 // The paper's method behind m, or nullopt for a peer.
 std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m);

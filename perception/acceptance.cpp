@@ -36,7 +36,7 @@ long knownCells(const ElevationMap& map) {
 Assessment assessRegistration(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
                               const Eigen::Isometry3d& believed_WS, const Matrix6d* covariance,
                               const Degeneracy* degeneracy_at_nu, const AcceptanceConfig& config,
-                              const std::vector<double>* residuals) {
+                              const std::vector<double>* residuals, double step_mahalanobis2) {
   Assessment a;
   // The lines' agreement at ν.
   const std::vector<double> u = residuals && residuals->size() == std::size_t(map1.grid().cells())
@@ -93,6 +93,10 @@ Assessment assessRegistration(const ElevationMap& map1, const LocusMapper& image
     if (!covariance->allFinite() || llt.info() != Eigen::Success)
       a.reject_reasons.push_back("covariance: not positive definite");
   }
+  a.step_mahalanobis2 = step_mahalanobis2;
+  if (step_mahalanobis2 > config.max_step_mahalanobis2)  // NaN: not known, no reason
+    a.reject_reasons.push_back(format("not converged: a Gauss-Newton step of its cost from the estimate is %.1f", step_mahalanobis2) +
+                               format(" in squared Mahalanobis distance (at most %.2f)", config.max_step_mahalanobis2));
   a.accepted = a.reject_reasons.empty();
   return a;
 }

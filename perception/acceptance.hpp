@@ -5,6 +5,7 @@
 // Onboard code: nothing here sees a true pose.
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,12 @@ struct AcceptanceConfig {
   // The overlap: at least min_overlap_lines lines, and min_overlap_fraction of map 1's known cells.
   long min_overlap_lines = 200;
   double min_overlap_fraction = 0.05;
+  // The method stopped at a minimum of its own cost: one Gauss–Newton step of that cost from the
+  // estimate (IconicResult::step_mahalanobis2) predicts a decrease of E/σ² of at most χ²₆'s
+  // 99.9 % point, i.e. the cost's minimum lies inside the estimate's own 99.9 % region. At a
+  // minimum it is about 0; a descent that stalled on a long valley of the cost stops short of it
+  // by more than its noise allows.
+  double max_step_mahalanobis2 = 22.458;
 };
 
 struct Assessment {
@@ -67,6 +74,7 @@ struct Assessment {
   double correction_m = 0, correction_deg = 0;  // the correction: believed → estimated pose of sensor J
   bool degenerate = false;
   std::vector<std::string> free_directions;
+  double step_mahalanobis2 = std::numeric_limits<double>::quiet_NaN();  // the method's, NaN if none
 };
 
 // The correction of sensor J's pose, δ = believed⁻¹·estimated (in the believed sensor's frame,
@@ -79,13 +87,15 @@ double correctionMahalanobis2(const Eigen::Isometry3d& believed_WS, const Eigen:
 // registerViews returns it): the lines' agreement and overlap at ν (normalizedResiduals), the
 // correction under the prior, the surface's degeneracy at ν (the method's, or if null degeneracy()
 // of JᵀJ there) and, when
-// the method gives one, whether its covariance is positive definite. Every failed test is one
-// reason. residuals: the lines' normalized residuals at ν if the method kept them
-// (IconicResult::residuals_u), else they are evaluated. Deterministic.
+// the method gives one, whether its covariance is positive definite, and whether it stopped at a
+// minimum of its own cost (step_mahalanobis2, IconicResult's; NaN: the method does not say).
+// Every failed test is one reason. residuals: the lines' normalized residuals at ν if the method
+// kept them (IconicResult::residuals_u), else they are evaluated. Deterministic.
 Assessment assessRegistration(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu,
                               const Eigen::Isometry3d& believed_WS, const Matrix6d* covariance,
                               const Degeneracy* degeneracy, const AcceptanceConfig& config,
-                              const std::vector<double>* residuals = nullptr);
+                              const std::vector<double>* residuals = nullptr,
+                              double step_mahalanobis2 = std::numeric_limits<double>::quiet_NaN());
 
 // Verification: the robust cost Σ c²·ln(1 + u²/c²) of each hypothesis's normalized residuals
 // (normalizedResiduals, one vector per hypothesis, all on map 1's cells) over the lines every

@@ -138,6 +138,19 @@ void finishResult(IconicResult& res, const ElevationMap& map1, const IconicError
 
 }  // namespace
 
+double stepMahalanobis2(const IconicError& e, double sigma2) {
+  if (e.overlap <= 6 || !(sigma2 > 0)) return std::numeric_limits<double>::quiet_NaN();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(e.JtJ);
+  const double top = eig.eigenvalues()(5);
+  if (!(top > 0)) return std::numeric_limits<double>::quiet_NaN();
+  // δᵀHδ = (g/2)ᵀH⁻¹(g/2) = Σ_k (v_k·g/2)²/λ_k.
+  const PoseVector p = eig.eigenvectors().transpose() * (0.5 * e.gradient);
+  double t = 0;
+  for (int k = 0; k < 6; ++k)
+    if (eig.eigenvalues()(k) > 1e-12 * top) t += p(k) * p(k) / eig.eigenvalues()(k);
+  return t / sigma2;
+}
+
 Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio) {
   PoseVector s;
   s << 1 / length_m, 1 / length_m, 1 / length_m, 1, 1, 1;  // ν = S·μ with μ in metres
@@ -324,7 +337,8 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
   res.nu = nu0;
   // LM's two departures (map 1's normals in the gradient, the annealed Cauchy loss) and its scale.
   const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
-  const double c_noise = options.robust_sigmas * std::sqrt(2.0) * medianSigma(map1);
+  const double sigma_noise = medianSigma(map1);
+  const double c_noise = options.robust_sigmas * std::sqrt(2.0) * sigma_noise;
   const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
   // The lines of the current estimate: E at a narrower loss is summed from them again, not searched.
   std::vector<int> hints(std::size_t(map1.grid().cells()), -1);  // each line's last bracket
@@ -373,6 +387,9 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
     }
     k *= 4;  // undo the last halving and try a longer step next time
   }
+  // Its own cost (map 1's normals, the loss's last scale) in metres: σ of a line's residual, the
+  // difference of two maps, √2·σ̃.
+  res.step_mahalanobis2 = stepMahalanobis2(e, 2 * sigma_noise * sigma_noise);
   res.residuals_u.assign(std::size_t(map1.grid().cells()), std::numeric_limits<double>::quiet_NaN());
   finishResult(res, map1,
                sumLines(sampleLines(map1, image2, res.nu, true, nullptr, 1, false, &hints, &res.residuals_u), 0.0));
@@ -415,6 +432,8 @@ IconicResult iconicPaperDescent(const ElevationMap& map1, const LocusMapper& ima
     }
   }
   finishResult(res, map1, e);  // e: the plain error at res.nu
+  const double sigma_noise = medianSigma(map1);
+  res.step_mahalanobis2 = stepMahalanobis2(e, 2 * sigma_noise * sigma_noise);
   return res;
 }
 
@@ -505,6 +524,10 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
       }
     }
     res.converged = converged;
+    // Its own cost at the level's end (the last level's is kept): metres, σ of a line's residual
+    // √2·σ̃; normalized residuals: 1.
+    const double s = std::sqrt(2.0) * medianSigma(map1);
+    res.step_mahalanobis2 = stepMahalanobis2(e, weighted ? 1.0 : s * s);
   }
   c_final = c;
   return res;

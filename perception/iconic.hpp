@@ -3,6 +3,7 @@
 // candidate transform, and its gradient by eq. 7–8 (docs/matching.md, "Iconic matching").
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -107,7 +108,19 @@ struct IconicResult {
   // Each line's normalized residual at the estimate, as normalizedResiduals(map1, image2, nu)
   // gives it (empty when the method does not keep them): the verdict reads them.
   std::vector<double> residuals_u;
+  // Whether the method stopped at a minimum of its own cost (stepMahalanobis2 of that cost at the
+  // estimate, at the loss's last scale): about 0 at a minimum, large where the method stalled
+  // short of one. NaN where the method does not say.
+  double step_mahalanobis2 = std::numeric_limits<double>::quiet_NaN();
 };
+
+// One Gauss–Newton step of a cost at its evaluation point, δ = −H⁻¹·∂E/∂ν/2 (H = e.JtJ, the
+// loss's weights in it), and its squared length in the uncertainty of that cost's minimum,
+// δᵀ·H·δ/σ² (σ: the residuals' noise in the cost's units; 1 for normalized residuals). It is the
+// decrease of E/σ² the step predicts: χ²₆-distributed at the true pose, 0 at the cost's minimum.
+// Directions H does not constrain (eigenvalues below 1e-12 of the largest) are left out. NaN with
+// 6 lines or fewer.
+double stepMahalanobis2(const IconicError& e, double sigma2);
 
 struct Degeneracy {
   bool degenerate = false;

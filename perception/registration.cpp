@@ -9,7 +9,7 @@ namespace ambler::perception {
 
 bool twoStage(RegistrationMethod method) {
   return method == RegistrationMethod::FeaturesIconic || method == RegistrationMethod::FeaturesIconicRobust ||
-         method == RegistrationMethod::FeaturesLm;
+         method == RegistrationMethod::FeaturesLm || method == RegistrationMethod::FeaturesIconicWeighted;
 }
 
 AcceptanceConfig acceptanceFor(const RegistrationConfig& config, const Eigen::Isometry3d& T_0) {
@@ -94,16 +94,18 @@ Verification verifyHypotheses(const ElevationMap& map_i, const LocusMapper& imag
 RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& image_j,
                                  const Raster<std::uint8_t>* edges_j, const MapGrid& grid_j,
                                  RegistrationMethod method, const RegistrationConfig& config,
-                                 const LocusMapper* map_i_source) {
+                                 const LocusMapper* map_i_source, const ElevationMap* feature_map_i) {
   if (!map_i.grid().inWorldFrame()) throw std::invalid_argument("registerViews: map I is not in the world frame");
+  if (feature_map_i && !feature_map_i->grid().sameAs(map_i.grid()))
+    throw std::invalid_argument("registerViews: the feature stage's map I is not on map I's grid");
   RegistrationResult out;
   const LocusMapper mapper(image_j, edges_j, config.locus);
   PoseVector nu0 = PoseVector::Zero();  // the rover trusts its belief
   if (method == RegistrationMethod::Features || twoStage(method)) {
     // Map J as the rover has it: in the believed world, on grid_j (in its own frame M_J).
-    const LocusMapper mapper_j(image_j, edges_j, config.locus, grid_j.T_WM);
+    const LocusMapper mapper_j(image_j, edges_j, config.feature_locus ? *config.feature_locus : config.locus, grid_j.T_WM);
     out.map_j = mapper_j.map(grid_j);
-    out.features_i = extractFeatures(map_i, config.features);
+    out.features_i = extractFeatures(feature_map_i ? *feature_map_i : map_i, config.features);
     out.features_j = extractFeatures(*out.map_j, config.features);
     FeatureMatchConfig match = config.match;
     const MapGrid& g = map_i.grid();  // in the world: its M is the world
@@ -133,7 +135,8 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
       case RegistrationMethod::IconicRobust:
       case RegistrationMethod::FeaturesIconicRobust:
         return iconicGradientDescent(map_i, mapper, start, options);
-      case RegistrationMethod::IconicWeighted: {
+      case RegistrationMethod::IconicWeighted:
+      case RegistrationMethod::FeaturesIconicWeighted: {
         IconicOptions weighted = options;
         weighted.map1_source = map_i_source;
         return iconicWeighted(map_i, mapper, start, weighted);
@@ -161,7 +164,8 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
   out.iterations = out.iconic.iterations;
   const Degeneracy d{out.iconic.degenerate, out.iconic.free_directions};
   out.assessment =
-      assessRegistration(map_i, mapper, out.nu, believed, &out.iconic.covariance, &d, config.acceptance, &out.iconic.residuals_u);
+      assessRegistration(map_i, mapper, out.nu, believed, &out.iconic.covariance, &d, config.acceptance, &out.iconic.residuals_u,
+                         out.iconic.step_mahalanobis2);
   return out;
 }
 

@@ -24,6 +24,7 @@ enum class RegistrationMethod : std::uint8_t {
   IconicLm,              // Levenberg–Marquardt, robust, coarse to fine, from T_0
   IconicWeighted,        // the same with residuals weighted by 1/(σ₁² + σ₂²)
   FeaturesLm,            // two stages with our second: Levenberg–Marquardt
+  FeaturesIconicWeighted,  // two stages with the weighted LM (feature matching on the plain maps)
 };
 
 // Whether the method runs feature matching first, then verifies its refined hypotheses.
@@ -50,6 +51,10 @@ struct RegistrationConfig {
   std::optional<OdometryModel> odometry;
   // Verification screens feature matching's pairings on the lines of every screen_stride-th cell.
   int screen_stride = 4;
+  // The locus configuration map J is made with for the feature stage, when it differs from
+  // `locus` (the weighted method maps with the footprint's σ_z term, which feature extraction
+  // should not read; eval sets this to the plain one). Unset: `locus`.
+  std::optional<LocusConfig> feature_locus;
 };
 
 // The verdict's thresholds for a pair whose believed relative pose is T_0 (sensor J in sensor
@@ -131,10 +136,13 @@ MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, con
 // believed world; see believedGrid). Map I must be in the world frame (its grid's T_WM the
 // identity). map_i_source, if given, is the locus mapper map I was made with (image I and its
 // edges): the weighted method's covariance then counts the pixels map I's lines share
-// (IconicOptions::map1_source). Throws std::invalid_argument otherwise.
+// (IconicOptions::map1_source). feature_map_i, if given, is the map I feature matching reads
+// (made with config.feature_locus; the same grid as map_i), else map_i. Throws
+// std::invalid_argument when map I is not in the world frame or the two maps' grids differ.
 RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& image_j,
                                  const Raster<std::uint8_t>* edges_j, const MapGrid& grid_j,
                                  RegistrationMethod method, const RegistrationConfig& config,
-                                 const LocusMapper* map_i_source = nullptr);
+                                 const LocusMapper* map_i_source = nullptr,
+                                 const ElevationMap* feature_map_i = nullptr);
 
 }  // namespace ambler::perception

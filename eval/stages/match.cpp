@@ -64,6 +64,7 @@ nlohmann::ordered_json assessmentJson(const perception::Assessment& a) {
   j["correction_deg"] = a.correction_deg;
   j["mahalanobis2"] = a.mahalanobis2;
   j["degenerate"] = a.degenerate;
+  if (std::isfinite(a.step_mahalanobis2)) j["step_mahalanobis2"] = a.step_mahalanobis2;
   return j;
 }
 

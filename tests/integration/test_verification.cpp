@@ -30,7 +30,8 @@ TEST(Verification, TheDemosWrongFeatureStagesNeitherMisleadNorPassSilently) {
   for (const int seed : {14, 107}) {
     Scenario sc = loadScenario(kScenarios / "demo.yaml");
     sc.seed = std::uint64_t(seed);
-    sc.matching->methods = {MatchMethod::Features, MatchMethod::FeaturesIconicRobust, MatchMethod::FeaturesLm};
+    sc.matching->methods = {MatchMethod::Features, MatchMethod::FeaturesIconicRobust, MatchMethod::FeaturesLm,
+                            MatchMethod::FeaturesIconicWeighted};
     if (seed == 14) sc.matching->methods.push_back(MatchMethod::FeaturesIconic);  // the paper's descent, as printed
     test::TempDir run;
     const auto metrics = runScenario(sc, {run.dir, false});
@@ -56,7 +57,8 @@ TEST(Verification, TheDemosWrongFeatureStagesNeitherMisleadNorPassSilently) {
       EXPECT_FALSE(m["false_accept"].get<bool>()) << "seed " << seed << " " << method;
       EXPECT_TRUE(accepted) << "seed " << seed << " " << method;
       // Never worse than refining T_0 by its own cost.
-      const std::string file = std::string("pair_0_1_") + (method == "features+iconic_robust" ? "features_iconic_robust" : "features_iconic_lm") + ".json";
+      std::string file = "pair_0_1_" + method + ".json";
+      file.replace(file.find('+'), 1, "_");
       const auto pair = readJson(run.dir / "matching" / file);
       const auto& hs = pair["verification"]["hypotheses"];
       double chosen = 0, t0 = 0;

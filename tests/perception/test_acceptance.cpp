@@ -2,7 +2,8 @@
 // correction's Mahalanobis distance against their closed forms, the verification cost over the
 // lines every hypothesis has, and each reason to reject on a scene built to have it: ground with
 // three caps seen twice (the truth accepted, a wrong pose refused by its residuals), a correction
-// the prior cannot explain, a plane (degenerate), and a covariance that is not positive definite.
+// the prior cannot explain, a plane (degenerate), a covariance that is not positive definite, and a
+// descent stopped short of its cost's minimum.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -191,6 +192,102 @@ TEST(Acceptance, TooLittleOverlapIsRefused) {
   EXPECT_TRUE(hasReason(a, "overlap:"));
 }
 
+// One Gauss–Newton step's statistic, δᵀHδ/σ² = Σ_k (v_k·g/2)²/λ_k/σ², on a diagonal H: a direction
+// H does not constrain (λ = 0) adds nothing, and with 6 lines or fewer there is none.
+TEST(Acceptance, TheStepStatisticIsItsClosedForm) {
+  IconicError e;
+  e.overlap = 100;
+  e.JtJ = PoseVector(1, 4, 9, 16, 25, 0).asDiagonal();
+  e.gradient << 2, 2, 6, 0, 10, 7;  // g/2 = (1, 1, 3, 0, 5, 3.5)
+  const double sigma2 = 0.5;
+  EXPECT_NEAR(stepMahalanobis2(e, sigma2), (1.0 / 1 + 1.0 / 4 + 9.0 / 9 + 0 + 25.0 / 25) / sigma2, 1e-12);
+  e.overlap = 6;
+  EXPECT_TRUE(std::isnan(stepMahalanobis2(e, sigma2)));
+}
+
+// The statistic is the decrease of E/σ² one Gauss–Newton step predicts: on the caps 2 cm and 0.2°
+// from the truth (plain squares, image 2's normals: the exact gradient), taking the step lowers E
+// by T·σ² to within 10 % (the residuals' second-order terms over a 2 cm step), and T at the truth
+// is what the noise-free images' interpolation leaves, far below the statistic of the offset.
+TEST(Acceptance, TheStepStatisticIsTheDecreaseOneStepPredicts) {
+  CapsScene s;
+  const LocusMapper m = s.mapper(s.T_WS);
+  PoseVector nu;
+  nu << 0, 0, 0.2 * kDeg, 0.02, -0.01, 0.01;
+  const IconicError e = iconicError(s.map1, m, nu, true);
+  const double sigma2 = 1e-6;  // (1 mm)²: T in units of it
+  const double T = stepMahalanobis2(e, sigma2);
+  const PoseVector delta = e.JtJ.ldlt().solve(-0.5 * e.gradient);
+  const IconicError after = iconicError(s.map1, m, nu + delta, false);
+  EXPECT_NEAR((e.E - after.E) / sigma2, T, 0.1 * T);
+  EXPECT_LT(stepMahalanobis2(iconicError(s.map1, m, PoseVector::Zero(), true), sigma2), 0.01 * T);
+}
+
+// A descent stopped short of its cost's minimum is refused ("not converged"), and the same start
+// refined to the minimum by LM is accepted: the caps believed 0.1 m and 1° off.
+TEST(Acceptance, AStallShortOfTheMinimumIsRefused) {
+  CapsScene s;
+  const Eigen::Isometry3d believed = s.T_WS * (Eigen::Translation3d(0.08, -0.05, 0.03) * Eigen::AngleAxisd(1 * kDeg, Eigen::Vector3d::UnitZ()));
+  const LocusMapper m = s.mapper(believed);
+  IconicOptions stall;
+  stall.max_iterations = 2;
+  const IconicResult stalled = iconicGradientDescent(s.map1, m, PoseVector::Zero(), stall);
+  const IconicResult lm = iconicLevenbergMarquardt(s.map1, m, PoseVector::Zero());
+  const AcceptanceConfig config = wide();
+  const Assessment a = assessRegistration(s.map1, m, stalled.nu, believed, nullptr, nullptr, config, nullptr,
+                                          stalled.step_mahalanobis2);
+  EXPECT_FALSE(a.accepted);
+  EXPECT_TRUE(hasReason(a, "not converged:")) << (a.reject_reasons.empty() ? "" : a.reject_reasons.front());
+  const Assessment b = assessRegistration(s.map1, m, lm.nu, believed, nullptr, nullptr, config, nullptr, lm.step_mahalanobis2);
+  EXPECT_TRUE(b.accepted) << (b.reject_reasons.empty() ? "" : b.reject_reasons.front());
+  EXPECT_LT(lm.step_mahalanobis2, config.max_step_mahalanobis2);
+  // Unknown (NaN): no reason.
+  EXPECT_FALSE(hasReason(assessRegistration(s.map1, m, lm.nu, believed, nullptr, nullptr, config), "not converged:"));
+}
+
+// features+iconic_weighted: its iconic stage reads the weighted map I (σ_z with the footprint's
+// term), its feature stage the plain one, and map J made with config.feature_locus: the features
+// are those of the plain maps. A feature map on another grid is refused.
+TEST(Verification, TheWeightedTwoStageMethodsFeaturesComeFromThePlainMaps) {
+  CapsScene s;
+  const Eigen::Isometry3d believed = s.T_WS * Eigen::Translation3d(0.05, -0.03, 0.02);
+  const RangeImage image1 = test::capsImage(s.caps, s.T1);
+  const Raster<std::uint8_t> edges1 = detectRangeEdges(image1, GncConfig{});
+  const MapGrid grid = s.map1.grid();
+  RegistrationConfig config;
+  config.acceptance = wide();
+  config.feature_locus = config.locus;
+  config.locus.footprint_sigma = true;
+  const ElevationMap plain = LocusMapper(image1, &edges1, *config.feature_locus).map(grid);
+  const ElevationMap weighted = LocusMapper(image1, &edges1, config.locus).map(grid);
+  RangeImage image2 = s.image;
+  image2.T_WS = believed;
+  const MapGrid grid_j = believedGrid(grid, s.T1, believed);
+  const RegistrationResult r = registerViews(weighted, image2, &s.edges, grid_j, RegistrationMethod::FeaturesIconicWeighted,
+                                             config, nullptr, &plain);
+  const std::vector<Feature> expected = extractFeatures(plain, config.features);
+  ASSERT_EQ(r.features_i.size(), expected.size());
+  for (std::size_t k = 0; k < expected.size(); ++k) EXPECT_EQ(r.features_i[k].position, expected[k].position);
+  const LocusMapper mapper_j(image2, &s.edges, *config.feature_locus, grid_j.T_WM);
+  ASSERT_TRUE(r.map_j.has_value());
+  const ElevationMap plain_j = mapper_j.map(grid_j);
+  ASSERT_EQ(r.map_j->elevation().size(), plain_j.elevation().size());
+  long differ = 0;  // cells whose elevation or σ_z is not bit-identical (NaN equal to NaN)
+  for (long k = 0; k < plain_j.elevation().size(); ++k)
+    for (const auto* m : {&r.map_j->elevation(), &r.map_j->sigma()}) {
+      const float a = m->data()[k], b = (m == &r.map_j->elevation() ? plain_j.elevation() : plain_j.sigma()).data()[k];
+      differ += !(a == b || (std::isnan(a) && std::isnan(b)));
+    }
+  EXPECT_EQ(differ, 0);
+  // The weighted refinement finds the truth (the caps' 5 mm of test_iconic) and is believed.
+  const PoseError e = poseError(poseFromVector(s.correction(believed)), poseFromVector(r.nu));
+  EXPECT_LT(e.translation_m, 5e-3);
+  EXPECT_TRUE(r.assessment.accepted) << (r.assessment.reject_reasons.empty() ? "" : r.assessment.reject_reasons.front());
+  const ElevationMap other(MapGrid::covering(-2, 2, 0, 4, 0.1));
+  EXPECT_THROW(registerViews(weighted, image2, &s.edges, grid_j, RegistrationMethod::FeaturesIconicWeighted, config,
+                             nullptr, &other),
+               std::invalid_argument);
+}
 
 // Verification on the caps with a planted wrong pairing: feature matching's T_F put 0.8 m, 0.6 m
 // and 20° off the truth, the rover believing it is E off. Returns the verification by LM, its
