@@ -4,7 +4,8 @@
 // across surface orientation and noise, and across map resolution
 // (docs/experiments/locus_vs_cartesian.md). matching: every matching method against the rover's
 // initial error (docs/experiments/matching.md). acceptance: the rover's verdict on every
-// registration against the truth (docs/experiments/acceptance.md).
+// registration against the truth (docs/experiments/acceptance.md). descent: the iconic descent's
+// departures from the paper's, one at a time (docs/experiments/descent.md).
 #include <filesystem>
 #include <string>
 
@@ -41,5 +42,23 @@ std::string reportMatching(const ExperimentOptions& options);
 // failed run.
 std::string runAcceptance(const ExperimentOptions& options);
 std::string reportAcceptance(const ExperimentOptions& options);
+
+// `ambler experiment descent` (docs/experiments/descent.md): iconicGradientDescent's four departures
+// from the paper's descent (IconicOptions::descent_*), on the acceptance experiment's pairs.
+struct DescentOptions {
+  ExperimentOptions experiment;  // out, sweeps (acceptance_*_seeds.yaml), quick (one seed), progress
+  int seeds = 10;                // the first `seeds` of each terrain's sweep
+  bool timing = false;           // fill time_s and the table's time column (they then differ from run to run)
+};
+
+// Scans and maps each pair (in out/pair.tmp/, removed after it), registers it by every variant (the ladder
+// literal → iconic_robust, and iconic_robust less each departure) from its believed pose, writes
+// out/results.csv (a row per pair and variant), then reportDescent. Throws SweepError for a bad
+// sweep file, one without the seed axis or the map and matching sections, or --seeds beyond it.
+std::string runDescent(const DescentOptions& options);
+// Reports out/results.csv as it is: writes out/table.md (per terrain and variant: successes,
+// median and 95th-percentile errors, median iterations and time) and returns it. Throws SweepError
+// when the CSV is missing or not the experiment's.
+std::string reportDescent(const DescentOptions& options);
 
 }  // namespace ambler::eval

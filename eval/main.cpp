@@ -180,6 +180,26 @@ int main(int argc, char** argv) {
   acceptance->add_flag("--report", acc_report, "Run nothing: report DIR/TERRAIN/results.csv as they are");
   acceptance->add_flag("--quiet,-q", acc_quiet, "No progress lines on stderr");
 
+  DescentOptions desc_opt;
+  std::string desc_out, desc_sweeps = desc_opt.experiment.sweeps.string();
+  bool desc_quiet = false, desc_report = false;
+  auto* descent = experiment->add_subcommand(
+      "descent", "The iconic descent's departures from the paper's, added one at a time and removed one at a time, "
+                 "on the acceptance pairs: DIR/table.md and DIR/results.csv.");
+  descent->add_option("--out,-o", desc_out, "Experiment directory to write (created if missing)")->required();
+  auto* desc_quick =
+      descent->add_flag("--quick", desc_opt.experiment.quick, "A reduced run: the first seed of each terrain");
+  auto* desc_seeds =
+      descent->add_option("--seeds", desc_opt.seeds, "The first N seeds of each terrain")->capture_default_str();
+  desc_quick->excludes(desc_seeds);
+  descent->add_option("--sweeps", desc_sweeps, "Directory of acceptance_{mars,fractal,dem}_seeds.yaml")
+      ->capture_default_str();
+  auto* desc_timing = descent->add_flag("--timing", desc_opt.timing,
+                                        "Fill time_s and the time column (they then differ from run to run)");
+  auto* desc_report_flag = descent->add_flag("--report", desc_report, "Run nothing: report DIR/results.csv as it is");
+  desc_report_flag->excludes(desc_quick)->excludes(desc_seeds)->excludes(desc_timing);
+  descent->add_flag("--quiet,-q", desc_quiet, "No progress lines on stderr");
+
   // CLI11 would say "A subcommand is required" for a mistyped command.
   if (argc > 1 && argv[1][0] != '-') {
     std::string names;
@@ -267,6 +287,12 @@ int main(int argc, char** argv) {
       acc_opt.sweeps = acc_sweeps;
       acc_opt.progress = !acc_quiet;
       std::fputs((acc_report ? reportAcceptance(acc_opt) : runAcceptance(acc_opt)).c_str(), stdout);
+    } else if (*descent) {
+      checkOutDir(desc_out);
+      desc_opt.experiment.out = desc_out;
+      desc_opt.experiment.sweeps = desc_sweeps;
+      desc_opt.experiment.progress = !desc_quiet;
+      std::fputs((desc_report ? reportDescent(desc_opt) : runDescent(desc_opt)).c_str(), stdout);
     } else if (*bench_scan) {
       bench_opt.json = bench_json;
       benchScan(bench_opt);

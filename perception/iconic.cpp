@@ -336,16 +336,18 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
   IconicResult res;
   res.nu = nu0;
   // LM's two departures (map 1's normals in the gradient, the annealed Cauchy loss) and its scale.
-  const std::vector<Eigen::Vector3d> normals = referenceNormals(map1);
+  const std::vector<Eigen::Vector3d> normals =
+      options.descent_reference_normals ? referenceNormals(map1) : std::vector<Eigen::Vector3d>{};
   const double sigma_noise = medianSigma(map1);
-  const double c_noise = options.robust_sigmas * std::sqrt(2.0) * sigma_noise;
-  const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
+  const double sigmas = options.descent_robust_loss ? options.robust_sigmas : 0.0;
+  const double c_noise = sigmas * std::sqrt(2.0) * sigma_noise;
+  const auto scale = [&](const IconicError& at) { return sigmas > 0 ? std::max(c_noise, 2 * rms(at)) : 0.0; };
   // The lines of the current estimate: E at a narrower loss is summed from them again, not searched.
   std::vector<int> hints(std::size_t(map1.grid().cells()), -1);  // each line's last bracket
   // One level, on the lines of the finest stride given (1 by default).
   const int stride = options.strides.empty() ? 1 : std::max(1, options.strides.back());
   const auto sample = [&](const PoseVector& nu) {
-    return sampleLines(map1, image2, nu, true, &normals, stride, false, &hints);
+    return sampleLines(map1, image2, nu, true, options.descent_reference_normals ? &normals : nullptr, stride, false, &hints);
   };
   LineSamples lines = sample(res.nu);
   IconicError e = sumLines(lines, 0.0);
@@ -355,16 +357,58 @@ IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& 
   // The gain K = A·diag(AᵀHA)⁻¹·Aᵀ: ν = A·μ, μ = (r, t′) with the rotation about the centroid of
   // map 1's known cells (t = t′ + centroid × r), so that a yaw does not drag a translation with it
   // through the map's far-away origin; each μ_i then steps on its own scale 1/(AᵀHA)_ii.
+  // Without it (descent_centroid_gain off) K is the identity. g = K·∂E/∂ν/2.
   Matrix6d A = Matrix6d::Identity();
   A.block<3, 3>(3, 0) = skew(knownCentroid(map1));
+  const auto direction = [&](const IconicError& at) -> PoseVector {
+    if (!options.descent_centroid_gain) return 0.5 * at.gradient;
+    const PoseVector scaled = (A.transpose() * at.JtJ * A).diagonal().cwiseMax(1e-12);
+    return A * (0.5 * A.transpose() * at.gradient).cwiseQuotient(scaled);
+  };
+  if (!options.descent_backtracking && e.overlap > 6) {
+    // One gain for the run and the paper descent's stop rules (iconicPaperDescent): ν ← ν − gain·K·∂E/∂ν,
+    // gain = paper_gain/λ_max(K·H at ν0), whose eigenvalues are H's, or with the centroid gain those of
+    // D^-½·AᵀHA·D^-½, D = diag(AᵀHA). With every departure off this is iconicPaperDescent, bit for bit.
+    Matrix6d M = e.JtJ;
+    if (options.descent_centroid_gain) {
+      const PoseVector d = (A.transpose() * e.JtJ * A).diagonal().cwiseMax(1e-12).cwiseSqrt().cwiseInverse();
+      M = d.asDiagonal() * (A.transpose() * e.JtJ * A) * d.asDiagonal();
+    }
+    const double lambda_max = Eigen::SelfAdjointEigenSolver<Matrix6d>(M).eigenvalues()(5);
+    const double gain = lambda_max > 0 ? options.paper_gain / lambda_max : 0.0;
+    while (gain > 0) {
+      if (rms(e) < options.floor_m) {
+        res.converged = true;
+        break;
+      }
+      if (res.iterations >= options.paper_max_iterations) break;
+      ++res.iterations;
+      const PoseVector next = res.nu - 2 * gain * direction(e);
+      LineSamples next_lines = sample(next);
+      const IconicError t = sumLines(next_lines, c);
+      if (t.overlap <= 6) break;
+      if (!(t.E < e.E)) {  // E as printed, each pose's over its own lines; the lower E kept
+        res.converged = (t.E - e.E) / e.E < options.min_relative_decrease;
+        break;
+      }
+      const double decrease = (e.E - t.E) / e.E;
+      res.nu = next, e = t, lines = std::move(next_lines);
+      record(res, e);
+      if (decrease < options.min_relative_decrease) {
+        res.converged = true;
+        break;
+      }
+      const double c_next = scale(e);
+      if (c_next < c) c = c_next, e = sumLines(lines, c);  // the loss narrows with the residuals
+    }
+  }
   double k = 0.5;  // the step in units of that gain, adapted from there
-  for (; res.iterations < options.max_iterations && e.overlap > 6; ++res.iterations) {
+  for (; options.descent_backtracking && res.iterations < options.max_iterations && e.overlap > 6; ++res.iterations) {
     if (rms(e) < options.floor_m) {
       res.converged = true;
       break;
     }
-    const PoseVector scaled = (A.transpose() * e.JtJ * A).diagonal().cwiseMax(1e-12);
-    const PoseVector g = A * (0.5 * A.transpose() * e.gradient).cwiseQuotient(scaled);
+    const PoseVector g = direction(e);
     bool stepped = false;
     for (int halvings = 0; halvings < 40 && !stepped; ++halvings, k *= 0.5) {
       const PoseVector trial = res.nu - k * g;

@@ -85,6 +85,16 @@ struct IconicOptions {
   // than the methods above).
   double paper_gain = 0.5;
   int paper_max_iterations = 2000;
+  // iconicGradientDescent's four departures from the paper's descent, each of which can be turned
+  // off (ambler experiment descent; docs/experiments/descent.md): map 1's normals in the Jacobian
+  // (off: image 2's at the hit); the annealed Cauchy loss (off: plain squares); the gain
+  // A·diag(AᵀHA)⁻¹·Aᵀ with rotations about map 1's centroid (off: the identity); the backtracking
+  // on k over the common lines (off: one gain, k = paper_gain/λ_max of the gain-weighted JᵀJ at ν0,
+  // with iconicPaperDescent's stop rules and paper_max_iterations). All four off is that descent.
+  bool descent_reference_normals = true;
+  bool descent_robust_loss = true;
+  bool descent_centroid_gain = true;
+  bool descent_backtracking = true;
 };
 
 struct IconicResult {
@@ -139,7 +149,8 @@ Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio = 1e-4)
 // to the user). k is halved until the cost (over the lines both poses have) decreases and grown
 // again after each success, until the decrease is below min_relative_decrease (at the loss's
 // narrowest scale) or the RMS below floor_m. As LM: map 1's normals in the gradient, the annealed Cauchy loss; one level,
-// the lines of options.strides' last stride.
+// the lines of options.strides' last stride. Each departure can be turned off (IconicOptions::descent_*);
+// with all four off the result is iconicPaperDescent's, bit for bit.
 IconicResult iconicGradientDescent(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                                    const IconicOptions& options = {});
 

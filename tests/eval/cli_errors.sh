@@ -244,6 +244,9 @@ expect_error basin_merge_with_timing '--merge: merges the shards. files; --timin
 
 # ---- Experiments
 expect_error experiment_sweeps_missing 'nosweeps/tilt_noise\.yaml: cannot open file' experiment locus-vs-cartesian --out out --sweeps nosweeps --quiet
+expect_error descent_seeds_below_one '--seeds: expected an integer >= 1, got 0' experiment descent --out out --seeds 0 --quiet
+expect_error descent_quick_with_seeds '--quick excludes --seeds \(see --help\)' experiment descent --out out --quick --seeds 3
+expect_error descent_report_without_results 'adir/results\.csv: cannot open file' experiment descent --out adir --report --quiet
 
 # ---- Reports (adir: an empty directory, made above)
 expect_error report_not_a_run_directory 'adir: not a run, sweep or basin directory \(no metrics\.json, results\.csv or basin\.csv\)' report adir
