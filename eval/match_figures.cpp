@@ -399,7 +399,12 @@ cv::Mat successHeatmap(const SuccessGrid& g, int width, int height) {
     centred(img, subtitle[i], {width / 2, 44 + 16 * int(i)}, i ? 0.4 : 0.45, kInk);
   const int cw = (width - left - right) / int(std::max<std::size_t>(1, cols));
   const int ch = (height - top - bottom) / int(std::max<std::size_t>(1, rows));
-  const double text = std::clamp(std::min(cw / 110.0, ch / 60.0), 0.35, 0.7);
+  // The text's scale: "k/n" and the note's lines must fit a cell (the note's first line 36·text
+  // under "k/n", each next one 22·text further, about 60·text for "k/n" and one line).
+  std::size_t note_lines = 0;
+  for (const std::string& n : g.notes) note_lines = std::max(note_lines, lines(n).size());
+  const double tall = 60.0 + 22.0 * double(note_lines > 1 ? note_lines - 1 : 0);
+  const double text = std::clamp(std::min(cw / 110.0, (ch - 6) / tall), 0.35, 0.7);
   for (std::size_t i = 0; i < rows; ++i) {
     const int y0 = top + int(rows - 1 - i) * ch;  // row 0 at the bottom
     centred(img, g.row_labels[i], {left / 2 + 8, y0 + ch / 2}, 0.5, kInk);
