@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <string>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include "base/random.hpp"
@@ -47,6 +48,52 @@ terrains::TerrainSpec marsGround() {
 
 double nees(const PoseVector& e, const Matrix6d& P) { return e.dot(P.ldlt().solve(e)); }
 
+// One trial of the weighted method as registration runs it: views I and J scanned with the given
+// keys, map I (its σ_z with the footprint's term, as eval::PairRegistration maps it) and its
+// mapper, image J at the believed pose (unwrapped, its edges), the weighted LM from there, and
+// the NEES of its covariance and of the naive (JᵀWJ)⁻¹ at its estimate. Not movable: the mappers
+// keep references to the images held here.
+struct WeightedTrial {
+  ScanMap map_i;
+  LocusConfig locus;
+  std::optional<LocusMapper> source;  // map I's mapper (the covariance counts its pixels)
+  RangeImage image_j;
+  Raster<std::uint8_t> edges_j;
+  std::optional<LocusMapper> mapper;  // image J at the believed pose
+  PoseVector truth;                   // the ν that corrects the believed pose
+  IconicResult res;
+  PoseVector e;                       // res.nu − truth
+  double nees = 0, naive = 0;
+
+  WeightedTrial(const sim::ErimScanner& scanner, const SensorModel& sensor, const Eigen::Isometry3d& T_I,
+                const Eigen::Isometry3d& T_J, const Eigen::Isometry3d& believed, const MapGrid& grid,
+                ScanToMapConfig map_config, std::uint64_t key_i, std::uint64_t key_j) {
+    map_config.locus.footprint_sigma = true;
+    locus = map_config.locus;
+    locus.sensor = sensor;
+    GncConfig gnc = map_config.gnc;
+    gnc.sensor = sensor;
+    map_i = scanToMap(scanner.scan(T_I, key_i).image, sensor, T_I, grid, map_config);
+    source.emplace(map_i.image, &*map_i.edges, locus);
+    image_j = scanner.scan(T_J, key_j).image;
+    image_j.T_WS = believed;
+    unwrapRanges(image_j, sensor);
+    edges_j = detectRangeEdges(image_j, gnc);
+    mapper.emplace(image_j, &edges_j, locus);
+    truth = vectorFromPose(believed * T_J.inverse());
+    IconicOptions options;
+    options.map1_source = &*source;
+    res = iconicWeighted(map_i.map, *mapper, PoseVector::Zero(), options);
+    if (res.degenerate) return;
+    e = res.nu - truth;
+    nees = ambler::perception::nees(e, res.covariance);
+    const IconicError at = iconicError(map_i.map, *mapper, res.nu, true, 0.0, nullptr, 1, true);
+    naive = ambler::perception::nees(e, at.JtJ.ldlt().solve(Matrix6d::Identity()));
+  }
+  WeightedTrial(const WeightedTrial&) = delete;
+  WeightedTrial& operator=(const WeightedTrial&) = delete;
+};
+
 TEST(MatchingCalibration, WeightedCovarianceMatchesTheErrors) {
   const auto t0 = std::chrono::steady_clock::now();
   const test::TerrainWorld world(marsGround(), 3);
@@ -55,40 +102,27 @@ TEST(MatchingCalibration, WeightedCovarianceMatchesTheErrors) {
   const Eigen::Isometry3d T_I = sensorPose({0, -6, 3}, {0, -30 * kDeg, 0});
   const Eigen::Isometry3d T_J = sensorPose({0.6, -5.2, 3}, {0, -30 * kDeg, 10 * kDeg});
   const MapGrid grid = MapGrid::covering(-5, 5, -3, 8, 0.1);
-  ScanToMapConfig map_config;
-  // The weighted method's σ_z has the footprint's term (eval::PairRegistration); the unweighted LM
-  // measured alongside runs on the same maps.
-  map_config.locus.footprint_sigma = true;
-  LocusConfig locus = map_config.locus;
-  locus.sensor = sensor;
-  GncConfig gnc = map_config.gnc;
-  gnc.sensor = sensor;
+  // The weighted method's σ_z has the footprint's term (WeightedTrial); the unweighted LM measured
+  // alongside runs on the same maps.
   constexpr int kTrials = 50;
   double sum_weighted = 0, sum_naive = 0, sum_alike = 0, sum_lm = 0, sum_t = 0, sum_r = 0, sum_t_lm = 0, sum_r_lm = 0;
   int lm_trials = 0;
   for (int k = 0; k < kTrials; ++k) {
-    const sim::Scan scan_i = scanner.scan(T_I, base::streamKey(2024, k, 0));
-    const sim::Scan scan_j = scanner.scan(T_J, base::streamKey(2024, k, 1));
-    const ScanMap map_i = scanToMap(scan_i.image, sensor, T_I, grid, map_config);
-    const LocusMapper source(map_i.image, &*map_i.edges, locus);
     // The believed pose of J: 0.2 m across, 0.2 m along, 0.1 m up and 3° of yaw off, each sign drawn.
     base::Rng rng(base::streamKey(2024, k, 2));
     const auto sign = [&] { return rng.uniform() < 0.5 ? -1.0 : 1.0; };
     PoseVector off;
     off << 0, 0, sign() * 3 * kDeg, sign() * 0.2, sign() * 0.2, sign() * 0.1;
     const Eigen::Isometry3d believed = T_J * poseFromVector(off);
-    RangeImage image_j = scan_j.image;
-    image_j.T_WS = believed;
-    unwrapRanges(image_j, sensor);
-    const Raster<std::uint8_t> edges_j = detectRangeEdges(image_j, gnc);
-    const LocusMapper mapper(image_j, &edges_j, locus);
-    const PoseVector truth = vectorFromPose(believed * T_J.inverse());
-    IconicOptions options;
-    options.map1_source = &source;
-    const IconicResult res = iconicWeighted(map_i.map, mapper, PoseVector::Zero(), options);
+    const WeightedTrial t(scanner, sensor, T_I, T_J, believed, grid, ScanToMapConfig{}, base::streamKey(2024, k, 0),
+                          base::streamKey(2024, k, 1));
+    const IconicResult& res = t.res;
+    const ScanMap& map_i = t.map_i;
+    const LocusMapper& mapper = *t.mapper;
+    const PoseVector& truth = t.truth;
     ASSERT_FALSE(res.degenerate) << "trial " << k;
-    const PoseVector e = res.nu - truth;
-    const double n = nees(e, res.covariance);
+    const PoseVector& e = t.e;
+    const double n = t.nees;
     sum_weighted += n;
     // Scored as sensor J's pose: its error e_S = log(T̂⁻¹·T) in J's frame (T̂ the estimate, T the
     // truth) and its covariance A·P·Aᵀ (sensorPoseCovariance). NEES is invariant to first order
@@ -100,11 +134,10 @@ TEST(MatchingCalibration, WeightedCovarianceMatchesTheErrors) {
     const PoseError err = poseError(believed * T_J.inverse(), poseFromVector(res.nu));
     sum_t += err.translation_m, sum_r += err.rotation_deg;
     // The naive (JᵀWJ)⁻¹ at the same estimate: every line taken for an independent observation.
-    const IconicError at = iconicError(map_i.map, mapper, res.nu, true, 0.0, nullptr, 1, true);
-    const double naive = nees(e, at.JtJ.ldlt().solve(Matrix6d::Identity()));
+    const double naive = t.naive;
     sum_naive += naive;
     // Without map 1's image: its lines taken to share pixels as their crossings with image 2 do.
-    const double c = options.robust_sigmas;  // the loss's final scale, 3 σ
+    const double c = IconicOptions{}.robust_sigmas;  // the loss's final scale, 3 σ
     const double alike = nees(e, weightedCovariance(map_i.map, mapper, res.nu, c, referenceNormals(map_i.map), nullptr));
     sum_alike += alike;
     if (k % 5 == 0) {  // the unweighted LM on every fifth pair, for docs/matching.md
@@ -158,34 +191,18 @@ NeesAcross neesAcrossTerrains(bool quantise) {
       const Eigen::Isometry3d T_J = sensorPose(sc.views[1].xyz_m, sc.views[1].rpy_rad);
       const MapGrid grid = sc.map->grid();
       ScanToMapConfig map_config = sc.map->scanToMapConfig();
-      map_config.locus.footprint_sigma = true;
       map_config.locus.trust_edge_samples = true;  // as registration maps (eval::registrationConfig)
-      LocusConfig locus = map_config.locus;
-      locus.sensor = sc.sensor;
-      GncConfig gnc = map_config.gnc;
-      gnc.sensor = sc.sensor;
       for (int k = 0; k < 5; ++k) {
-        const sim::Scan scan_i = scanner.scan(T_I, base::streamKey(3030, std::uint64_t(seed), std::uint64_t(2 * k)));
-        const sim::Scan scan_j = scanner.scan(T_J, base::streamKey(3030, std::uint64_t(seed), std::uint64_t(2 * k + 1)));
-        const ScanMap map_i = scanToMap(scan_i.image, sc.sensor, T_I, grid, map_config);
-        const LocusMapper source(map_i.image, &*map_i.edges, locus);
         const Eigen::Isometry3d T_IJ = T_I.inverse() * T_J;
         const Eigen::Isometry3d believed = T_I * sc.matching->initialEstimate(T_IJ, std::uint64_t(seed * 10 + k), 0, 1);
-        RangeImage image_j = scan_j.image;
-        image_j.T_WS = believed;
-        unwrapRanges(image_j, sc.sensor);
-        const Raster<std::uint8_t> edges_j = detectRangeEdges(image_j, gnc);
-        const LocusMapper mapper(image_j, &edges_j, locus);
-        const PoseVector truth = vectorFromPose(believed * T_J.inverse());
-        IconicOptions options;
-        options.map1_source = &source;
-        const IconicResult res = iconicWeighted(map_i.map, mapper, PoseVector::Zero(), options);
+        const WeightedTrial t(scanner, sc.sensor, T_I, T_J, believed, grid, map_config,
+                              base::streamKey(3030, std::uint64_t(seed), std::uint64_t(2 * k)),
+                              base::streamKey(3030, std::uint64_t(seed), std::uint64_t(2 * k + 1)));
+        const IconicResult& res = t.res;
         if (res.degenerate) continue;
-        if (poseError(poseFromVector(truth), poseFromVector(res.nu)).translation_m > 0.05) continue;  // lost
-        const PoseVector e = res.nu - truth;
-        const double v = nees(e, res.covariance);
-        const IconicError at = iconicError(map_i.map, mapper, res.nu, true, 0.0, nullptr, 1, true);
-        sum += v, sum_naive += nees(e, at.JtJ.ldlt().solve(Matrix6d::Identity()));
+        if (poseError(poseFromVector(t.truth), poseFromVector(res.nu)).translation_m > 0.05) continue;  // lost
+        const double v = t.nees;
+        sum += v, sum_naive += t.naive;
         worst = std::max(worst, v);
         ++n;
       }
