@@ -338,23 +338,18 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
   if (const auto ms = f.get("methods")) {
     if (!ms->IsSequence() || ms->size() == 0) reader.fail("matching.methods", "expected a non-empty list of methods, got " + shown(*ms));
     m.methods.clear();
+    // The names as matchMethodName spells them, in the order the refusal lists them.
+    static constexpr MatchMethod kNamed[] = {
+        MatchMethod::Iconic,           MatchMethod::IconicLm,        MatchMethod::Features,
+        MatchMethod::FeaturesIconic,   MatchMethod::IconicWeighted,  MatchMethod::FeaturesLm,
+        MatchMethod::IcpPointToPlane,  MatchMethod::Gicp,            MatchMethod::Fgr,
+        MatchMethod::IconicRobust,     MatchMethod::FeaturesIconicRobust, MatchMethod::FeaturesIconicWeighted};
+    std::vector<std::string_view> names;
+    for (const MatchMethod k : kNamed) names.emplace_back(matchMethodName(k));
     for (std::size_t i = 0; i < ms->size(); ++i) {
       const std::string path = "matching.methods[" + std::to_string(i) + "]";
-      const std::string_view name = reader.choice((*ms)[i], path, {"iconic", "iconic_lm", "features", "features+iconic",
-                                                                   "iconic_weighted", "features+iconic_lm", "icp_point_to_plane", "gicp", "fgr",
-                                                                   "iconic_robust", "features+iconic_robust", "features+iconic_weighted"});
-      if (name == "features") m.methods.push_back(MatchMethod::Features);
-      else if (name == "iconic") m.methods.push_back(MatchMethod::Iconic);
-      else if (name == "features+iconic") m.methods.push_back(MatchMethod::FeaturesIconic);
-      else if (name == "iconic_lm") m.methods.push_back(MatchMethod::IconicLm);
-      else if (name == "iconic_weighted") m.methods.push_back(MatchMethod::IconicWeighted);
-      else if (name == "features+iconic_lm") m.methods.push_back(MatchMethod::FeaturesLm);
-      else if (name == "iconic_robust") m.methods.push_back(MatchMethod::IconicRobust);
-      else if (name == "features+iconic_robust") m.methods.push_back(MatchMethod::FeaturesIconicRobust);
-      else if (name == "features+iconic_weighted") m.methods.push_back(MatchMethod::FeaturesIconicWeighted);
-      else if (name == "icp_point_to_plane") m.methods.push_back(MatchMethod::IcpPointToPlane);
-      else if (name == "gicp") m.methods.push_back(MatchMethod::Gicp);
-      else m.methods.push_back(MatchMethod::Fgr);
+      const std::string_view name = reader.choice((*ms)[i], path, names);
+      m.methods.push_back(kNamed[std::find(names.begin(), names.end(), name) - names.begin()]);
     }
   }
   if (const auto e = f.get("initial_error")) {

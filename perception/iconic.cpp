@@ -498,7 +498,9 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
   res.nu = nu0;
   // The loss's narrowest scale: robust_sigmas σ of a residual, σ of the difference of two maps
   // (√2·σ̃ in metres), or 1 for r/σ.
-  const double c_noise = options.robust_sigmas * (weighted ? 1.0 : std::sqrt(2.0) * medianSigma(map1));
+  // σ of a line's residual in the cost's units: a difference of two maps, √2·σ̃ (metres), or 1.
+  const double sigma_line = weighted ? 1.0 : std::sqrt(2.0) * medianSigma(map1);
+  const double c_noise = options.robust_sigmas * sigma_line;
   const auto spread = [&](const IconicError& at) { return weighted ? rmsNormalized(at) : rms(at); };
   const auto scale = [&](const IconicError& at) { return options.robust_sigmas > 0 ? std::max(c_noise, 2 * spread(at)) : 0.0; };
   const double half_diagonal = 0.5 * std::hypot(map1.grid().cols * map1.grid().cell, map1.grid().rows * map1.grid().cell);
@@ -568,10 +570,8 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
       }
     }
     res.converged = converged;
-    // Its own cost at the level's end (the last level's is kept): metres, σ of a line's residual
-    // √2·σ̃; normalized residuals: 1.
-    const double s = std::sqrt(2.0) * medianSigma(map1);
-    res.step_mahalanobis2 = stepMahalanobis2(e, weighted ? 1.0 : s * s);
+    // Its own cost at the level's end (the last level's is kept).
+    res.step_mahalanobis2 = stepMahalanobis2(e, sigma_line * sigma_line);
   }
   c_final = c;
   return res;
