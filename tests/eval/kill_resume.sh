@@ -153,8 +153,15 @@ same basin "$tmp/bref/basin.csv" "$tmp/bkilled/basin.csv"
 # cause, keep the runs it recorded, and a resume without the limit must finish the same CSV.
 "$ambler" sweep "$tmp/sweep.yaml" --out "$tmp/full" -q --keep all 2>/dev/null &
 pid=$!
+# Kill it once a third of the runs' time has passed and the journal holds a record (on a loaded
+# machine the start alone can outlast a third of the quiet sweep).
 sleep "$(printf '%d.%03d' $((sweep_ms / 3000)) $((sweep_ms / 3 % 1000)))"
+for _ in $(seq 600); do
+  [[ -s "$tmp/full/results.journal" ]] || ! kill -0 $pid 2>/dev/null && break
+  sleep 0.05
+done
 kill -9 $pid 2>/dev/null; wait $pid 2>/dev/null
+[[ -s "$tmp/full/results.journal" ]] || { echo "FAIL full_disk: no journal after 30 s"; exit 1; }
 journal_before=$(wc -c <"$tmp/full/results.journal")
 cp "$tmp/full/results.journal" "$tmp/journal.before"
 (
