@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Do the outputs change? Builds revision REV (default HEAD) in a temporary worktree, runs the demo,
-# ledge, plane and mars scenarios and one sweep (scenarios/sweeps/noise_check.yaml) with it and with
-# this tree's build/ambler, and compares every file byte for byte: metrics.json without its
+# Do the outputs change? Builds revision REV (default HEAD) in a temporary worktree, runs every
+# scenario of scenarios/ that is one run, one sweep (scenarios/sweeps/noise_check.yaml) and one
+# basin (basin_rocks on a 2 × 2 grid) with it and with this tree's build/ambler, and compares every
+# file byte for byte: metrics.json without its
 # timing_s block (and each registration's time_s), rasters, pictures, scans, results.csv. Prints each file that differs (and, for
 # metrics.json, the differing values) and exits 1 if any does.
 #   bash scripts/same-outputs.sh [REV]        # this tree must be built (scripts/build.sh)
@@ -26,12 +27,18 @@ if [ ! -x "$cache/build/ambler" ]; then
 fi
 
 # The same inputs for both: this tree's scenario files.
+# Every single-run scenario in scenarios/ (a file with views:, not a sweep's base/axes), one sweep
+# with every run directory kept, and a basin on a small grid.
 run_all() {  # $1 = ambler binary, $2 = output directory
   rm -rf "$2"; mkdir -p "$2"
-  for s in demo ledge plane mars; do
-    "$1" run "scenarios/$s.yaml" --out "$2/$s" --quiet
-  done
+  local f name
+  while IFS= read -r f; do
+    name=${f#scenarios/}; name=${name%.yaml}; name=${name//\//_}
+    "$1" run "$f" --out "$2/$name" --quiet
+  done < <(grep -l '^views:' $(find scenarios -name '*.yaml' | sort))
   "$1" sweep scenarios/sweeps/noise_check.yaml --out "$2/sweep" --keep all --quiet
+  "$1" basin scenarios/experiments/basin_rocks.yaml --out "$2/basin" --quiet \
+    --translation-m 0,0.5 --rotation-deg 0,5 --trials 2
 }
 if [ -n "${AMBLER_SAME_OUTPUTS_KEEP:-}" ]; then
   out=$AMBLER_SAME_OUTPUTS_KEEP; mkdir -p "$out"
