@@ -7,15 +7,15 @@
 #include <iostream>
 #include <string>
 
-#include "eval/basin.hpp"
-#include "eval/bench.hpp"
-#include "eval/dem.hpp"
-#include "eval/experiment.hpp"
-#include "eval/io.hpp"
-#include "eval/report.hpp"
-#include "eval/runner.hpp"
-#include "eval/scenario.hpp"
-#include "eval/sweep.hpp"
+#include "eval/tools/basin/basin.hpp"
+#include "eval/tools/bench/bench.hpp"
+#include "eval/geo/dem.hpp"
+#include "eval/tools/experiment/experiment.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/tools/report/report.hpp"
+#include "eval/run/runner.hpp"
+#include "eval/scenario/scenario.hpp"
+#include "eval/tools/sweep/sweep.hpp"
 
 int main(int argc, char** argv) {
   using namespace ambler::eval;

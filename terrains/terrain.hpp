@@ -12,7 +12,7 @@
 namespace ambler::terrains {
 
 // Dem: a given base surface (heights on the spec's grid, e.g. a digital elevation model resampled by
-// eval/dem.hpp; terrains never reads files) with the components below added as for Plane.
+// eval/geo/dem.hpp; terrains never reads files) with the components below added as for Plane.
 enum class TerrainKind { Plane, Fractal, Sinusoid, Steps, Mars, Mjcf, Dem };
 
 struct SinusoidSpec {
@@ -53,7 +53,7 @@ struct TerrainSpec {
   std::optional<RockSpec> rocks;
   std::optional<CraterSpec> craters;
   std::string mjcf;                    // kind Mjcf: path of the MuJoCo world to load
-  // Kind Dem (docs/scenario.md, "terrain.kind: dem"): where the heights come from. Read by eval/dem.hpp,
+  // Kind Dem (docs/scenario.md, "terrain.kind: dem"): where the heights come from. Read by eval/geo/dem.hpp,
   // never by terrains; the DEM window is the grid's extent (size_m) sampled at cell_m.
   std::string dem;                                 // absolute path of the GeoTIFF
   std::optional<Eigen::Vector2d> dem_centre_m;     // window centre in the DEM's CRS; absent: the DEM's centre

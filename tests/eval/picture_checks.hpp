@@ -1,5 +1,5 @@
 #pragma once
-// What the pictures of eval/figures.hpp and eval/map_outputs.hpp are made of, written out from
+// What the pictures of eval/pictures/figures.hpp and eval/pictures/map_outputs.hpp are made of, written out from
 // their layout (framePicture: 8 px padding, a 28 px head, the picture centred, a 14 px colour
 // scale 8 px under it from x = 88, 160 px narrower than the canvas less padding; the map
 // pictures' legend strip of 14 px swatches), so tests can ask what a pixel shows.

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "eval/basin.hpp"
-#include "eval/scenario.hpp"
+#include "eval/tools/basin/basin.hpp"
+#include "eval/scenario/scenario.hpp"
 #include "perception/rigid_transform.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "test_support.hpp"

@@ -15,10 +15,10 @@
 #include <string>
 #include <vector>
 
-#include "eval/experiment.hpp"
-#include "eval/runner.hpp"
-#include "eval/scenario.hpp"
-#include "eval/sweep.hpp"
+#include "eval/tools/experiment/experiment.hpp"
+#include "eval/run/runner.hpp"
+#include "eval/scenario/scenario.hpp"
+#include "eval/tools/sweep/sweep.hpp"
 
 namespace ambler::eval {
 namespace {

@@ -1,4 +1,4 @@
-// The pictures of eval/figures.hpp against what they are meant to show: the colour of a cell or a
+// The pictures of eval/pictures/figures.hpp against what they are meant to show: the colour of a cell or a
 // pixel is the colour map's colour for its value (shaded as documented), no-data is its documented
 // colour, every cell lands where the layout puts it, and the colour scale under the picture is the
 // ramp. AMBLER_TEST_PICTURES=DIR keeps the pictures in DIR to look at.
@@ -12,8 +12,8 @@
 #include <limits>
 #include <numbers>
 
-#include "eval/figures.hpp"
-#include "eval/io.hpp"
+#include "eval/pictures/figures.hpp"
+#include "eval/scenario/io.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "perception/synthetic.hpp"
 #include "picture_checks.hpp"

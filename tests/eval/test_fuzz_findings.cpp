@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <string>
 
-#include "eval/io.hpp"
-#include "eval/scenario.hpp"
-#include "eval/sweep.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/scenario/scenario.hpp"
+#include "eval/tools/sweep/sweep.hpp"
 #include "test_support.hpp"
 
 namespace ambler::eval {
@@ -64,7 +64,7 @@ TEST(FuzzFindings, MergeMessageWithALineBreakInACellIsOneLine) {
 
 // Finding 4 (fuzz_scenario and fuzz_sweep, 600 s runs, after ~6 100 and ~1 300 executions): a
 // hang. yaml-cpp 0.7.0's LoadAll loops for ever, allocating, on a token that starts no node (a lone
-// ",", yaml-cpp issue 1040); eval/yaml_documents.hpp guards every LoadAll of the readers. The
+// ",", yaml-cpp issue 1040); eval/scenario/yaml_documents.hpp guards every LoadAll of the readers. The
 // saved inputs were a scenario and a sweep with a stray "," at the start of line 2.
 TEST(FuzzFindings, ALoneCommaIsASyntaxErrorNotAHang) {
   EXPECT_EQ(messageOf<ScenarioError>([] { parseScenario(",", "s.yaml"); }),

@@ -1,6 +1,6 @@
-// GeoTIFF map rasters (eval/geotiff.hpp): the geotransform against the grid's own cell centres,
+// GeoTIFF map rasters (eval/geo/geotiff.hpp): the geotransform against the grid's own cell centres,
 // the bytes GDAL and OpenCV read back against the raster written, the CRS, and refusals.
-#include "eval/geotiff.hpp"
+#include "eval/geo/geotiff.hpp"
 
 #include <cpl_conv.h>
 #include <gdal.h>
@@ -13,7 +13,7 @@
 #include <limits>
 #include <numbers>
 
-#include "eval/io.hpp"
+#include "eval/scenario/io.hpp"
 #include "perception/map_grid.hpp"
 #include "test_support.hpp"
 

@@ -1,4 +1,4 @@
-// The resume journal (eval/journal.hpp) and the progress bar (eval/progress.hpp). The kill-and-
+// The resume journal (eval/tools/journal.hpp) and the progress bar (eval/tools/progress.hpp). The kill-and-
 // resume test of whole sweeps and basins is kill_resume.sh.
 #include <gtest/gtest.h>
 
@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "eval/journal.hpp"
-#include "eval/progress.hpp"
+#include "eval/tools/journal.hpp"
+#include "eval/tools/progress.hpp"
 #include "test_support.hpp"
 
 namespace ambler::eval {

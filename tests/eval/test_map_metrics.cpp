@@ -13,10 +13,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "eval/figures.hpp"
-#include "eval/io.hpp"
-#include "eval/map_metrics.hpp"
-#include "eval/map_outputs.hpp"
+#include "eval/pictures/figures.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/score/map_metrics.hpp"
+#include "eval/pictures/map_outputs.hpp"
 #include "picture_checks.hpp"
 
 namespace ambler::eval {

@@ -1,4 +1,4 @@
-// The matching pictures of eval/match_figures.hpp against what they are meant to show: a feature
+// The matching pictures of eval/pictures/match_figures.hpp against what they are meant to show: a feature
 // colours the pixels where its position, extent and length put it, in its type's colour; the
 // difference of two maps is the ramp's colour of each cell's difference on the caller's span (0 its
 // white middle), grey where a cell is not known in both, and before and after share one scale; the
@@ -15,10 +15,10 @@
 #include <filesystem>
 #include <set>
 
-#include "eval/figures.hpp"
-#include "eval/io.hpp"
-#include "eval/match_figures.hpp"
-#include "eval/plot.hpp"
+#include "eval/pictures/figures.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/pictures/match_figures.hpp"
+#include "eval/pictures/plot.hpp"
 #include "picture_checks.hpp"
 
 namespace ambler::eval {

@@ -16,8 +16,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "eval/io.hpp"
-#include "eval/plot.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/pictures/plot.hpp"
 
 namespace ambler::eval {
 namespace {

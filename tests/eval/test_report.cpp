@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "eval/io.hpp"
-#include "eval/report.hpp"
-#include "eval/runner.hpp"
-#include "eval/scenario.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/tools/report/report.hpp"
+#include "eval/run/runner.hpp"
+#include "eval/scenario/scenario.hpp"
 #include "test_support.hpp"
 
 namespace ambler::eval {

@@ -13,10 +13,10 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
-#include "eval/figures.hpp"
-#include "eval/io.hpp"
-#include "eval/runner.hpp"
-#include "eval/scenario.hpp"
+#include "eval/pictures/figures.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/run/runner.hpp"
+#include "eval/scenario/scenario.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "picture_checks.hpp"
 #include "sim/ground_truth.hpp"
@@ -329,7 +329,7 @@ TEST(Run, MatchStageRegistersTheViewsAgainstTheTruePose) {
     EXPECT_LT(pair["trace"].back()["rms_m"].get<double>(), pair["trace"][0]["rms_m"].get<double>());
     EXPECT_TRUE(fs::is_regular_file(run.dir / "matching" / ("pair_0_1_difference_" + method + ".png")));
   }
-  // The pictures (eval/match_figures.hpp, tested in test_match_figures.cpp).
+  // The pictures (eval/pictures/match_figures.hpp, tested in test_match_figures.cpp).
   for (const char* name : {"view_0_features.png", "view_1_features.png", "pair_0_1_convergence.png"})
     EXPECT_TRUE(fs::is_regular_file(run.dir / "matching" / name)) << name;
 }

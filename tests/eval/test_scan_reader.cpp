@@ -11,8 +11,8 @@
 #include <numbers>
 #include <string>
 
-#include "eval/io.hpp"
-#include "eval/scan_reader.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/scenario/scan_reader.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "test_support.hpp"
 

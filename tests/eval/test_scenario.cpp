@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "eval/scenario.hpp"
+#include "eval/scenario/scenario.hpp"
 #include "perception/sensor_geometry.hpp"
 
 namespace ambler::eval {

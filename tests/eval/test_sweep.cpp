@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "eval/scenario.hpp"
-#include "eval/sweep.hpp"
+#include "eval/scenario/scenario.hpp"
+#include "eval/tools/sweep/sweep.hpp"
 #include "test_support.hpp"
 
 namespace ambler::eval {

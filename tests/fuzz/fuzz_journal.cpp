@@ -5,7 +5,7 @@
 #include <map>
 #include <string>
 
-#include "eval/journal.hpp"
+#include "eval/tools/journal.hpp"
 #include "fuzz_support.hpp"
 
 namespace {

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "eval/scan_reader.hpp"
+#include "eval/scenario/scan_reader.hpp"
 #include "fuzz_support.hpp"
 
 namespace {

@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "eval/io.hpp"
-#include "eval/sweep.hpp"
-#include "eval/sweep_internal.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/tools/sweep/sweep.hpp"
+#include "eval/tools/sweep/sweep_internal.hpp"
 #include "fuzz_support.hpp"
 
 namespace {

@@ -4,7 +4,7 @@
 #include <bit>
 #include <string>
 
-#include "eval/scan_reader.hpp"
+#include "eval/scenario/scan_reader.hpp"
 #include "fuzz_support.hpp"
 
 namespace {

@@ -3,7 +3,7 @@
 // the same resolvedYaml (docs/fuzzing.md).
 #include <string>
 
-#include "eval/scenario.hpp"
+#include "eval/scenario/scenario.hpp"
 #include "fuzz_support.hpp"
 
 namespace {

@@ -3,7 +3,7 @@
 // SweepError with one line naming the sweep file (docs/fuzzing.md).
 #include <string>
 
-#include "eval/sweep.hpp"
+#include "eval/tools/sweep/sweep.hpp"
 #include "fuzz_support.hpp"
 
 namespace {

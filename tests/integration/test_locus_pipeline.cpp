@@ -11,9 +11,9 @@
 #include <numbers>
 #include <string>
 
-#include "eval/map_metrics.hpp"
+#include "eval/score/map_metrics.hpp"
 #include "perception/scan_to_map.hpp"
-#include "eval/runner.hpp"
+#include "eval/run/runner.hpp"
 #include "perception/range_edges.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"

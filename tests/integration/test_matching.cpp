@@ -9,8 +9,8 @@
 #include <cstdio>
 #include <string>
 
-#include "eval/runner.hpp"
-#include "eval/scenario.hpp"
+#include "eval/run/runner.hpp"
+#include "eval/scenario/scenario.hpp"
 #include "test_support.hpp"
 
 namespace ambler::eval {

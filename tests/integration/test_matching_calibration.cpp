@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "base/random.hpp"
-#include "eval/dem.hpp"
-#include "eval/scenario.hpp"
+#include "eval/geo/dem.hpp"
+#include "eval/scenario/scenario.hpp"
 #include "perception/iconic.hpp"
 #include "perception/range_edges.hpp"
 #include "perception/registration.hpp"

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "eval/map_metrics.hpp"
+#include "eval/score/map_metrics.hpp"
 #include "perception/scan_to_map.hpp"
-#include "eval/runner.hpp"
+#include "eval/run/runner.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
 #include "sim/fixtures.hpp"

@@ -14,7 +14,7 @@
 #include <string>
 
 #include "perception/scan_to_map.hpp"
-#include "eval/runner.hpp"
+#include "eval/run/runner.hpp"
 #include "perception/range_edges.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"

@@ -11,8 +11,8 @@
 #include <fstream>
 #include <string>
 
-#include "eval/runner.hpp"
-#include "eval/scenario.hpp"
+#include "eval/run/runner.hpp"
+#include "eval/scenario/scenario.hpp"
 #include "test_support.hpp"
 
 namespace ambler::eval {

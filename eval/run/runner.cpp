@@ -1,0 +1,38 @@
+#include "eval/run/runner.hpp"
+
+#include "base/random.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/run/stages.hpp"
+
+namespace ambler::eval {
+
+namespace fs = std::filesystem;
+
+std::uint64_t viewSeed(std::uint64_t seed, int view) { return base::streamKey(seed, 1000 + view); }
+
+nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
+  Stopwatch total;
+  RunState state{sc, opt.out, opt.progress};
+  // No directory yet: the world stage makes it once the views are checked against the terrain,
+  // so a refused scenario leaves nothing behind.
+  state.metrics["name"] = sc.name;
+  state.metrics["seed"] = sc.seed;
+  for (const Stage& stage : runStages())
+    if (stage.wanted(sc)) stage.run(state);
+
+  nlohmann::ordered_json metrics = std::move(state.metrics);
+  metrics["timing_s"] = std::move(state.timing);
+  metrics["timing_s"]["total"] = total.seconds();
+  // Defaults the world stage found in a file (a DEM's centre and offset) are written as values.
+  Scenario resolved = sc;
+  if (state.terrain_resolved) resolved.terrain = *state.terrain_resolved;
+  writeText(state.out / "scenario.resolved.yaml", resolvedYaml(resolved));
+  writeJson(state.out / "metrics.json", metrics);
+  state.say("wrote     " + (state.out / "metrics.json").string() + ", " + (state.out / "terrain.png").string() +
+            ", " + (state.out / "scans").string() + "/, " + (sc.map ? (state.out / "maps").string() + "/, " : std::string()) +
+            (sc.matching ? (state.out / "matching").string() + "/, " : std::string()) +
+            (state.out / "world").string() + "/");
+  return metrics;
+}
+
+}  // namespace ambler::eval

@@ -1,0 +1,32 @@
+#pragma once
+// The stages of a run, in order (docs/architecture.md, "Adding a stage"). Each is a small unit in
+// eval/run/stages/ that calls the library for its work, scores it against ground truth and writes its
+// files; the runner only calls them in turn.
+#include <vector>
+
+#include "eval/run/run_state.hpp"
+
+namespace ambler::eval {
+
+struct Stage {
+  const char* name;
+  bool (*wanted)(const Scenario&);  // whether the scenario asks for this stage
+  void (*run)(RunState&);
+};
+
+// The registered stages, in the order a run calls them.
+const std::vector<Stage>& runStages();
+
+// The stages (eval/run/stages/<name>.cpp).
+namespace stages {
+Stage world();      // the MuJoCo world, its ray scene and ground truth; terrain.png
+Stage scan();       // one ERIM scan per view; scans/
+Stage map();        // the locus map of each scan, scored; maps/
+Stage cartesian();  // the Cartesian baseline of each scan, scored; maps/
+Stage match();      // each pair of views registered by each method, scored; matching/
+Stage merge();      // the composite map of every view, scored; maps/composite_*
+Stage footfall();   // each method's footfall on a map, scored on the true surface; footfall/
+Stage leg();        // the MuJoCo leg steps on each choice; leg/, world/leg.xml
+}  // namespace stages
+
+}  // namespace ambler::eval

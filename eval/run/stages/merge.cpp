@@ -1,0 +1,117 @@
+// The merge stage (docs/scenario.md, "merge"; docs/composite.md): every view's scan mapped on the
+// composite grid at its pose — the true one, or the rover's, chained from view 0 through the first
+// listed matching method's estimates — and merged by eq. 9 (perception::mergeInto). With matched
+// poses each link's covariance is propagated into the cells' σ (perception::registrationSigma), so
+// a composite built on a poor match says so. Scored against ground truth: maps/composite_*.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include "eval/score/map_metrics.hpp"
+#include "eval/pictures/map_outputs.hpp"
+#include "eval/run/stages.hpp"
+#include "perception/composite.hpp"
+#include "perception/placement.hpp"
+
+namespace ambler::eval::stages {
+
+namespace {
+
+void run(RunState& s) {
+  const Scenario& sc = s.scenario;
+  const MergeSpec& spec = *sc.merge;
+  const perception::MapGrid grid = spec.grid();
+  Stopwatch t;
+  // Matched poses: view 0 at its true pose (the composite's frame is view 0's world), the others
+  // chained through the first listed method's registrations that the rover accepted; a view no
+  // accepted registration reaches is left out. Only a calibrated covariance is propagated.
+  std::vector<perception::PlacementLink> links;
+  const MatchMethod first = sc.matching ? sc.matching->methods.front() : MatchMethod::IconicLm;
+  for (const PairEstimate& e : s.estimates) {
+    if (e.method != first) continue;
+    perception::PlacementLink l;
+    l.i = e.i, l.j = e.j, l.T_WS_i = e.T_WS_i, l.believed_WS_j = e.believed_WS_j, l.nu = e.nu, l.accepted = e.accepted;
+    if (e.covariance_calibrated) l.covariance = e.covariance;
+    links.push_back(l);
+  }
+  std::vector<perception::ViewPlacement> placements;
+  if (spec.poses == MergePoses::Matched) {
+    placements = perception::placeViews(int(s.views.size()), 0, s.views[0].T_WS, links);
+  } else {
+    placements.resize(s.views.size());
+    for (std::size_t k = 0; k < s.views.size(); ++k)
+      placements[k] = {k == 0 ? perception::PlacementHow::Reference : perception::PlacementHow::True, s.views[k].T_WS, {}};
+  }
+  int views_used = 0;
+  perception::LocusConfig locus = locusConfig(sc);
+  locus.footprint_sigma = true;  // the footprint's error is shared by every view (docs/composite.md)
+  // σ without the terrain's part (docs/locus.md, σ_rough): what is left is the part every view
+  // of a cell shares (docs/composite.md).
+  perception::LocusConfig noise_only = locus;
+  noise_only.roughness = false;
+  perception::ElevationMap composite(grid);
+  perception::Raster<float> composite_shared = perception::Raster<float>::Zero(grid.rows, grid.cols);
+  const perception::ElevationMap truth = s.truth->elevation(grid);
+  perception::Raster<std::uint8_t> visible = perception::Raster<std::uint8_t>::Zero(grid.rows, grid.cols);
+  for (std::size_t k = 0; k < s.views.size(); ++k) {
+    const ViewState& v = s.views[k];
+    if (placements[k].how == perception::PlacementHow::LeftOut) continue;
+    ++views_used;
+    // The scan as the map stage had it (unwrapped, its edges), at the composite's pose for it.
+    perception::ElevationMap map = perception::mapAtPose(*v.locus, placements[k].T_WS, grid, locus);
+    const perception::ElevationMap noise = perception::mapAtPose(*v.locus, placements[k].T_WS, grid, noise_only);
+    perception::Raster<float> shared = perception::Raster<float>::Zero(grid.rows, grid.cols);
+    for (int r = 0; r < grid.rows; ++r)
+      for (int c = 0; c < grid.cols; ++c)
+        if (map.stateAt(r, c) == perception::CellState::Known && noise.stateAt(r, c) == perception::CellState::Known)
+          shared(r, c) = std::sqrt(std::max(0.f, map.sigma()(r, c) * map.sigma()(r, c) - noise.sigma()(r, c) * noise.sigma()(r, c)));
+    // Each link's pose covariance, first order and independent: variances add.
+    const perception::Raster<float> extra = perception::placementSigma(map, placements[k].chain);
+    perception::addSigma(map, extra);
+    perception::mergeInto(composite, composite_shared, map, shared);
+    // What some view could see: visible if any view sees the true surface, else hidden if one
+    // view's field of view holds it behind terrain.
+    const auto& vis = *v.visibility;
+    for (int r = 0; r < grid.rows; ++r)
+      for (int c = 0; c < grid.cols; ++c) {
+        const std::uint8_t a = visible(r, c), b = vis(r, c);
+        const auto V = std::uint8_t(sim::Visibility::Visible), H = std::uint8_t(sim::Visibility::Hidden);
+        visible(r, c) = (a == V || b == V) ? V : (a == H || b == H) ? H : std::uint8_t(sim::Visibility::OutOfView);
+      }
+  }
+  s.addTime("merge", t.seconds());
+  const MapMetrics m = mapMetrics(composite, truth, visible);
+  s.metrics["composite"] = compositeJson(m, int(s.views.size()), mergePosesName(spec.poses));
+  s.metrics["composite"]["views_used"] = views_used;
+  nlohmann::ordered_json placement = nlohmann::ordered_json::array();
+  for (std::size_t k = 0; k < placements.size(); ++k) {
+    nlohmann::ordered_json e{{"view", k}, {"how", perception::placementHowName(placements[k].how)}};
+    // The links it was chained by, and those the rover rejected that would have placed it.
+    nlohmann::ordered_json chain = nlohmann::ordered_json::array();
+    for (const perception::ChainStep& c : placements[k].chain) chain.push_back({c.link->i, c.link->j});
+    e["links"] = chain;
+    placement.push_back(e);
+  }
+  s.metrics["composite"]["placement"] = placement;
+  nlohmann::ordered_json rejected = nlohmann::ordered_json::array();
+  for (const perception::PlacementLink& l : links)
+    if (!l.accepted) rejected.push_back({l.i, l.j});
+  s.metrics["composite"]["rejected_links"] = rejected;
+  writeMapFiles(s.out / "maps", "composite", composite, &truth,
+                sc.name + ": composite of " + std::to_string(s.views.size()) + " views (" + mergePosesName(spec.poses) +
+                    " poses)",
+                s.geo);
+  char line[200];
+  std::snprintf(line, sizeof line, "merge     composite of %d of %d views (%s poses): coverage %.1f%%, RMS error %.4f m, within 1σ %.0f%%",
+                views_used, int(s.views.size()), mergePosesName(spec.poses), 100 * m.coverage, m.rms_error_m, 100 * m.within_1sigma);
+  s.say(line);
+  s.composite = std::move(composite);
+}
+
+}  // namespace
+
+Stage merge() {
+  return {"merge", [](const Scenario& sc) { return sc.merge.has_value(); }, run};
+}
+
+}  // namespace ambler::eval::stages

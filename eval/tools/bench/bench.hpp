@@ -1,0 +1,38 @@
+#pragma once
+// `ambler bench`: measured speed, medians of repetitions in one process.
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "eval/scenario/scenario.hpp"
+
+namespace ambler::eval {
+
+struct BenchOptions {
+  int repetitions = 5;
+  std::filesystem::path json;  // empty: no file
+  bool progress = true;        // a bar on a terminal, a line per measurement otherwise (stderr)
+};
+
+// The scanner benchmark (docs/benchmarks.md): emulator vs a single-thread mj_ray loop on a 64×256
+// scan, and emulator vs a bare Embree packet cast of the same rays (sim::RayScene::referenceCast)
+// on a 1024×4096 scan over all cores. The ERIM's default sensor model. Prints a table.
+nlohmann::ordered_json benchScan(const BenchOptions& options);
+
+// The mapping benchmark (docs/benchmarks.md): nanoseconds per cell of the locus map at 2, 5, 10 and
+// 20 cm on one thread and on all cores, against the Cartesian baseline on the same scan. The scan
+// is the ERIM's default sensor model (the demo's), unwrapped and edge-detected by
+// perception::scanToMap as a run's map stage does; the maps are then timed alone. Prints a table.
+nlohmann::ordered_json benchMap(const BenchOptions& options);
+
+// The matching benchmark: the scenario's first matching pair (world, scans and maps built once, as
+// a run builds them), each of its methods timed per pair on one thread and on all cores (medians),
+// with its iterations and pose error. Throws std::runtime_error if the scenario has no map or
+// matching section. Prints a table.
+nlohmann::ordered_json benchMatch(const Scenario& scenario, const BenchOptions& options);
+
+// The footfall benchmark (docs/benchmarks.md): every method of docs/footfall.md, dense over 100 × 100
+// candidate centres (10 000) of a fractal map (σ 1 cm everywhere), 30 cm foot, at 10 cm cells (a 10 m
+// square) and at 2 cm (a 2 m square); medians on one thread and on all cores. Prints a table.
+nlohmann::ordered_json benchFootfall(const BenchOptions& options);
+
+}  // namespace ambler::eval
