@@ -16,7 +16,7 @@ packages=(
   slurmctld slurmd slurm-client munge  # tests/cluster/slurm.sh: a one-node Slurm cluster (no daemon is started)
   parallel                          # tests/cluster/parallel.sh: GNU parallel
   libgdal-dev gdal-bin              # terrain.kind: dem (GeoTIFF in), GeoTIFF map rasters out, gdalinfo in tests
-  gnuplot-nox fonts-dejavu-core     # the charts of figures and reports (eval/pictures/plot.cpp runs gnuplot)
+  gnuplot-nox fonts-dejavu-core     # the charts of figures and reports (eval/plot.cpp runs gnuplot)
   chromium                          # tests/eval/report_chromium.sh: the report as a browser renders it
 )
 missing=()
