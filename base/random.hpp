@@ -23,6 +23,9 @@ constexpr std::uint64_t streamKey(std::uint64_t seed, std::uint64_t a, std::uint
   return mix64(mix64(mix64(seed) ^ a) ^ (b * 0xD6E8FEB86659FD93ull));
 }
 
+// The seed of view `view`'s scan noise: a stream of the scenario's seed apart from the terrain's.
+constexpr std::uint64_t viewSeed(std::uint64_t seed, int view) { return streamKey(seed, std::uint64_t(1000 + view)); }
+
 // Uniform double in [0, 1) from 53 random bits.
 constexpr double toUnit(std::uint64_t bits) { return double(bits >> 11) * 0x1.0p-53; }
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Do the outputs change? Builds revision REV (default HEAD) in a temporary worktree, runs every
 # scenario of scenarios/ that is one run, one sweep (scenarios/sweeps/noise_check.yaml) and one
-# basin (basin_rocks on a 2 × 2 grid) with it and with this tree's build/ambler, and compares every
+# basin (basin_rocks on a 2 × 2 grid), and the reports of the sweep and the basin (a run's report shows its timings), with it and with this tree's build/ambler, and compares every
 # file byte for byte: metrics.json without its
 # timing_s block (and each registration's time_s), rasters, pictures, scans, results.csv. Prints each file that differs (and, for
 # metrics.json, the differing values) and exits 1 if any does.
@@ -39,6 +39,7 @@ run_all() {  # $1 = ambler binary, $2 = output directory
   "$1" sweep scenarios/sweeps/noise_check.yaml --out "$2/sweep" --keep all --quiet
   "$1" basin scenarios/experiments/basin_rocks.yaml --out "$2/basin" --quiet \
     --translation-m 0,0.5 --rotation-deg 0,5 --trials 2
+  for name in sweep basin; do "$1" report "$2/$name" >/dev/null 2>&1; done
 }
 if [ -n "${AMBLER_SAME_OUTPUTS_KEEP:-}" ]; then
   out=$AMBLER_SAME_OUTPUTS_KEEP; mkdir -p "$out"

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "base/atomic_file.hpp"
+#include "base/read_file.hpp"
 
 namespace ambler::sim {
 
@@ -300,23 +301,29 @@ std::string legXml(const std::string& world_file, const std::string& world_xml_t
   return x.str();
 }
 
+namespace {
+
+// The world's MJCF text; a file that cannot be read is named in the one line.
+std::string worldText(const std::filesystem::path& world_xml) {
+  try {
+    return base::readFile(world_xml);
+  } catch (const base::ReadError& e) {
+    throw std::runtime_error(world_xml.string() + ": " + e.what());
+  }
+}
+
+}  // namespace
+
 std::filesystem::path writeLegWorld(const std::filesystem::path& world_xml, const LegConfig& c) {
-  std::ifstream in(world_xml);
-  if (!in) throw std::runtime_error(world_xml.string() + ": cannot open file");
-  std::stringstream text;
-  text << in.rdbuf();
+  const std::string text = worldText(world_xml);
   const auto out = world_xml.parent_path() / "leg.xml";
-  base::writeFileAtomic(out, legXml(world_xml.filename().string(), text.str(), c));
+  base::writeFileAtomic(out, legXml(world_xml.filename().string(), text, c));
   return out;
 }
 
 LegOutcome stepLeg(const std::filesystem::path& world_xml, double x, double y, const LegConfig& c) {
   validate(c);
-  std::ifstream in(world_xml);
-  if (!in) throw std::runtime_error(world_xml.string() + ": cannot open file");
-  std::stringstream text;
-  text << in.rdbuf();
-  auto model = loadText(legXml(world_xml.filename().string(), text.str(), c), world_xml.parent_path());
+  auto model = loadText(legXml(world_xml.filename().string(), worldText(world_xml), c), world_xml.parent_path());
   mjModel* m = model.get();
   std::unique_ptr<mjData, DataDeleter> data(mj_makeData(m));
   mjData* d = data.get();

@@ -11,16 +11,16 @@
 #include <memory>
 #include <string>
 
+#include "base/text.hpp"
 #include "eval/geo/gdal_internal.hpp"
 #include "eval/scenario/message_text.hpp"
-#include "eval/scenario/scenario_internal.hpp"
 #include "terrains/terrain.hpp"
 
 namespace ambler::eval {
 
 namespace {
 
-using scenario_detail::shortest;
+using base::plainText;
 
 struct DatasetCloser {
   void operator()(void* ds) const { GDALClose(ds); }
@@ -28,7 +28,71 @@ struct DatasetCloser {
 using Dataset = std::unique_ptr<void, DatasetCloser>;
 
 // "1.5" for 1.5, rounded to a millimetre so a message stays short.
-std::string mm(double v) { return shortest(std::round(v * 1e3) / 1e3); }
+std::string mm(double v) { return plainText(std::round(v * 1e3) / 1e3); }
+
+}  // namespace
+
+namespace {
+
+// A DEM's georeference: the geotransform of north-up pixels in a projected CRS in metres, and the
+// CRS's name. Throws DemError naming the file and the cause for anything else.
+struct Georeference {
+  std::array<double, 6> t{};
+  std::string crs_name;
+};
+
+Georeference georeference(GDALDatasetH ds, const std::string& file) {
+  const auto fail = [&](const std::string& cause) -> void { throw DemError(file + ": " + cause); };
+  std::array<double, 6> t{};
+  if (GDALGetGeoTransform(ds, t.data()) != CE_None || (t[0] == 0 && t[1] == 1 && t[2] == 0 && t[3] == 0 &&
+                                                              t[4] == 0 && t[5] == 1))
+    fail("no geotransform: the DEM is not georeferenced");
+  if (t[2] != 0.0 || t[4] != 0.0)
+    fail("rotated geotransform (terms 2 and 4: " + plainText(t[2]) + ", " + plainText(t[4]) +
+         "); expected a north-up DEM");
+  if (!(t[1] > 0.0 && t[5] < 0.0))
+    fail("expected north-up pixels (geotransform terms 1 > 0 and 5 < 0), got " + plainText(t[1]) + " and " +
+         plainText(t[5]));
+
+  // The CRS: projected, in metres.
+  OGRSpatialReferenceH srs = GDALGetSpatialRef(ds);
+  if (!srs) fail("no coordinate reference system; expected a projected CRS in metres");
+  const char* name_c = OSRGetName(srs);
+  const std::string crs_name = name_c ? name_c : "unnamed";
+  if (!OSRIsProjected(srs)) {
+    fail(std::string(OSRIsGeographic(srs) ? "geographic CRS '" + escapedLine(crs_name) + "' (degrees)"
+                                          : "CRS '" + escapedLine(crs_name) + "' is not projected") +
+         "; expected a projected CRS in metres");
+  }
+  char* unit_c = nullptr;
+  const double unit = OSRGetLinearUnits(srs, &unit_c);
+  if (std::abs(unit - 1.0) > 1e-12)
+    fail("linear unit '" + escapedLine(unit_c ? unit_c : "?") + "' (" + plainText(unit) +
+         " m); expected a projected CRS in metres");
+  return {t, crs_name};
+}
+
+// The window's pixels hold no nodata (nor NaN); throws DemError naming the file, the count and the
+// first such pixel otherwise.
+void checkNoData(GDALRasterBandH band, const std::vector<double>& block, int bw, int bh, int c0, int r0,
+                 const std::string& file) {
+  const auto fail = [&](const std::string& cause) -> void { throw DemError(file + ": " + cause); };
+  int has_nodata = 0;
+  const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
+  long bad = 0;
+  int first_c = -1, first_r = -1;
+  for (int j = 0; j < bh; ++j)
+    for (int i = 0; i < bw; ++i) {
+      const double z = block[std::size_t(j) * bw + i];
+      if (std::isnan(z) || (has_nodata && (z == nodata || (std::isnan(nodata) && std::isnan(z))))) {
+        if (bad++ == 0) first_c = c0 + i, first_r = r0 + j;
+      }
+    }
+  if (bad > 0)
+    fail(std::to_string(bad) + " nodata pixel" + (bad == 1 ? "" : "s") +
+         " under the window (the first at column " + std::to_string(first_c) + ", row " + std::to_string(first_r) +
+         "); expected none: move or shrink the window");
+}
 
 }  // namespace
 
@@ -46,32 +110,9 @@ DemSurface readDem(const terrains::TerrainSpec& spec) {
   if (W < 2 || H < 2)
     fail("expected at least 2 x 2 pixels, got " + std::to_string(W) + " x " + std::to_string(H));
 
-  std::array<double, 6> t{};
-  if (GDALGetGeoTransform(ds.get(), t.data()) != CE_None || (t[0] == 0 && t[1] == 1 && t[2] == 0 && t[3] == 0 &&
-                                                              t[4] == 0 && t[5] == 1))
-    fail("no geotransform: the DEM is not georeferenced");
-  if (t[2] != 0.0 || t[4] != 0.0)
-    fail("rotated geotransform (terms 2 and 4: " + shortest(t[2]) + ", " + shortest(t[4]) +
-         "); expected a north-up DEM");
-  if (!(t[1] > 0.0 && t[5] < 0.0))
-    fail("expected north-up pixels (geotransform terms 1 > 0 and 5 < 0), got " + shortest(t[1]) + " and " +
-         shortest(t[5]));
-
-  // The CRS: projected, in metres.
-  OGRSpatialReferenceH srs = GDALGetSpatialRef(ds.get());
-  if (!srs) fail("no coordinate reference system; expected a projected CRS in metres");
-  const char* name_c = OSRGetName(srs);
-  const std::string crs_name = name_c ? name_c : "unnamed";
-  if (!OSRIsProjected(srs)) {
-    fail(std::string(OSRIsGeographic(srs) ? "geographic CRS '" + escapedLine(crs_name) + "' (degrees)"
-                                          : "CRS '" + escapedLine(crs_name) + "' is not projected") +
-         "; expected a projected CRS in metres");
-  }
-  char* unit_c = nullptr;
-  const double unit = OSRGetLinearUnits(srs, &unit_c);
-  if (std::abs(unit - 1.0) > 1e-12)
-    fail("linear unit '" + escapedLine(unit_c ? unit_c : "?") + "' (" + shortest(unit) +
-         " m); expected a projected CRS in metres");
+  const Georeference geo = georeference(ds.get(), file);
+  const std::array<double, 6>& t = geo.t;
+  const std::string& crs_name = geo.crs_name;
   GDALRasterBandH band = GDALGetRasterBand(ds.get(), 1);  // band 1, whatever else the file holds
   const std::string z_unit = GDALGetRasterUnitType(band);
   if (!z_unit.empty() && z_unit != "m" && z_unit != "metre" && z_unit != "meter" && z_unit != "metres" &&
@@ -102,21 +143,7 @@ DemSurface readDem(const terrains::TerrainSpec& spec) {
   std::vector<double> block(std::size_t(bw) * std::size_t(bh));
   if (GDALRasterIO(band, GF_Read, c0, r0, bw, bh, block.data(), bw, bh, GDT_Float64, 0, 0) != CE_None)
     fail("cannot read pixels" + gdal::lastError());
-  int has_nodata = 0;
-  const double nodata = GDALGetRasterNoDataValue(band, &has_nodata);
-  long bad = 0;
-  int first_c = -1, first_r = -1;
-  for (int j = 0; j < bh; ++j)
-    for (int i = 0; i < bw; ++i) {
-      const double z = block[std::size_t(j) * bw + i];
-      if (std::isnan(z) || (has_nodata && (z == nodata || (std::isnan(nodata) && std::isnan(z))))) {
-        if (bad++ == 0) first_c = c0 + i, first_r = r0 + j;
-      }
-    }
-  if (bad > 0)
-    fail(std::to_string(bad) + " nodata pixel" + (bad == 1 ? "" : "s") +
-         " under the window (the first at column " + std::to_string(first_c) + ", row " + std::to_string(first_r) +
-         "); expected none: move or shrink the window");
+  checkNoData(band, block, bw, bh, c0, r0, file);
   int has_scale = 0, has_offset = 0;
   const double scale = GDALGetRasterScale(band, &has_scale), offset = GDALGetRasterOffset(band, &has_offset);
   for (double& z : block) z = z * (has_scale ? scale : 1.0) + (has_offset ? offset : 0.0);

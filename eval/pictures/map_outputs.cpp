@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "eval/pictures/figures.hpp"
+#include "eval/pictures/legend.hpp"
 #include "eval/scenario/io.hpp"
 
 namespace ambler::eval {
@@ -47,29 +48,20 @@ cv::Mat enlarge(const cv::Mat& cells, const ElevationMap& map) {
   return out;
 }
 
-// `canvas` with a strip of legend entries, then `note`, added along the bottom.
-cv::Mat withLegend(const cv::Mat& canvas, const std::vector<Swatch>& entries, const std::string& note = "") {
-  cv::Mat out;
-  cv::copyMakeBorder(canvas, out, 0, 26, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(255, 255, 255));
-  int x = 8;
-  const int y = canvas.rows + 4;
-  for (const auto& e : entries) {
-    cv::Mat box = out(cv::Rect(x, y, 14, 14));
-    box.setTo(cv::Scalar(e.colour[0], e.colour[1], e.colour[2]));
-    if (e.hatched)
-      for (int j = 0; j < 14; ++j)
-        for (int i = 0; i < 14; ++i)
-          if (stripe(i, j)) box.at<cv::Vec3b>(j, i) = kStripe;
-    cv::rectangle(out, cv::Rect(x, y, 14, 14), cv::Scalar(0, 0, 0), 1);
-    cv::putText(out, e.label, cv::Point(x + 20, y + 12), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(0, 0, 0), 1,
-                cv::LINE_AA);
-    int baseline = 0;
-    x += 20 + cv::getTextSize(e.label, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &baseline).width + 18;
-  }
-  if (!note.empty())
-    cv::putText(out, note, cv::Point(x, y + 12), cv::FONT_HERSHEY_SIMPLEX, 0.4, cv::Scalar(90, 90, 90), 1,
-                cv::LINE_AA);
-  return out;
+// A swatch's legend entry: a box of its colour (hatched as the map's shadows where asked), outlined.
+cv::Mat withLegend(const cv::Mat& canvas, const std::vector<Swatch>& swatches, const std::string& note = "") {
+  std::vector<LegendEntry> entries;
+  for (const Swatch& e : swatches)
+    entries.push_back({e.label, [e](cv::Mat& out, cv::Point at) {
+                         cv::Mat box = out(cv::Rect(at.x, at.y, 14, 14));
+                         box.setTo(cv::Scalar(e.colour[0], e.colour[1], e.colour[2]));
+                         if (e.hatched)
+                           for (int j = 0; j < 14; ++j)
+                             for (int i = 0; i < 14; ++i)
+                               if (stripe(i, j)) box.at<cv::Vec3b>(j, i) = kStripe;
+                         cv::rectangle(out, cv::Rect(at.x, at.y, 14, 14), cv::Scalar(0, 0, 0), 1);
+                       }});
+  return ambler::eval::withLegend(canvas, entries, note);
 }
 
 std::string format(const char* pattern, double v) {

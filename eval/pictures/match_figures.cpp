@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "eval/pictures/figures.hpp"
+#include "eval/pictures/legend.hpp"
 #include "eval/scenario/io.hpp"
 #include "eval/pictures/plot.hpp"
 
@@ -128,44 +129,39 @@ void drawFeatures(cv::Mat& img, const MapView& v, const std::vector<Feature>& fe
 }
 
 enum class Glyph { Ring, Segment, Disc, Box };
-struct LegendEntry {
+struct Mark {
   Glyph glyph;
   cv::Scalar colour;
   std::string label;
 };
 
-// `canvas` with a 26 px strip of legend entries along the bottom (the map pictures' legend: a
-// 14 px glyph, its label 20 px right of it, 18 px between entries).
-cv::Mat withLegend(const cv::Mat& canvas, const std::vector<LegendEntry>& entries) {
-  cv::Mat out;
-  cv::copyMakeBorder(canvas, out, 0, 26, 0, 0, cv::BORDER_CONSTANT, cv::Scalar(255, 255, 255));
-  int x = 8;
-  const int y = canvas.rows + 4;
-  for (const auto& e : entries) {
-    const cv::Point c(x + 7, y + 7);
-    cv::Mat swatch = out(cv::Rect(x, y, 14, 14));
-    switch (e.glyph) {
-      case Glyph::Box:
-        swatch.setTo(e.colour);
-        cv::rectangle(out, cv::Rect(x, y, 14, 14), kOutline, 1);
-        break;
-      case Glyph::Segment:
-        segment(out, (c + cv::Point(-7, 5)) * (1 << kShift), (c + cv::Point(7, -5)) * (1 << kShift), e.colour, 3);
-        break;
-      case Glyph::Disc:
-        swatch.setTo(cv::Scalar(150, 150, 150));
-        tint(swatch, cv::Point(7, 7) * (1 << kShift), 6 << kShift, e.colour);
-        [[fallthrough]];
-      case Glyph::Ring:
-        ring(out, c * (1 << kShift), 6 << kShift, e.colour);
-        dot(out, c * (1 << kShift), e.colour);
-        break;
-    }
-    cv::putText(out, e.label, cv::Point(x + 20, y + 12), cv::FONT_HERSHEY_SIMPLEX, 0.4, kOutline, 1, cv::LINE_AA);
-    int baseline = 0;
-    x += 20 + cv::getTextSize(e.label, cv::FONT_HERSHEY_SIMPLEX, 0.4, 1, &baseline).width + 18;
-  }
-  return out;
+// The legend of the matching pictures: each mark as the picture draws it.
+cv::Mat withLegend(const cv::Mat& canvas, const std::vector<Mark>& marks) {
+  std::vector<LegendEntry> entries;
+  for (const Mark& e : marks)
+    entries.push_back({e.label, [e](cv::Mat& out, cv::Point at) {
+                         const cv::Point c(at.x + 7, at.y + 7);
+                         cv::Mat swatch = out(cv::Rect(at.x, at.y, 14, 14));
+                         switch (e.glyph) {
+                           case Glyph::Box:
+                             swatch.setTo(e.colour);
+                             cv::rectangle(out, cv::Rect(at.x, at.y, 14, 14), kOutline, 1);
+                             break;
+                           case Glyph::Segment:
+                             segment(out, (c + cv::Point(-7, 5)) * (1 << kShift), (c + cv::Point(7, -5)) * (1 << kShift),
+                                     e.colour, 3);
+                             break;
+                           case Glyph::Disc:
+                             swatch.setTo(cv::Scalar(150, 150, 150));
+                             tint(swatch, cv::Point(7, 7) * (1 << kShift), 6 << kShift, e.colour);
+                             [[fallthrough]];
+                           case Glyph::Ring:
+                             ring(out, c * (1 << kShift), 6 << kShift, e.colour);
+                             dot(out, c * (1 << kShift), e.colour);
+                             break;
+                         }
+                       }});
+  return ambler::eval::withLegend(canvas, entries);
 }
 
 void checkSameGrid(const ElevationMap& a, const ElevationMap& b, const char* what) {

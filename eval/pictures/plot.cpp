@@ -26,7 +26,8 @@
 #include <system_error>
 
 #include "eval/scenario/io.hpp"
-#include "eval/tools/journal.hpp"
+#include "base/digest.hpp"
+#include "base/text.hpp"
 
 extern char** environ;  // the child's environment starts from ours (unistd.h declares it only with _GNU_SOURCE)
 
@@ -40,11 +41,7 @@ namespace fs = std::filesystem;
 double pow10(int e) { return e >= 0 ? std::pow(10.0, e) : 1.0 / std::pow(10.0, -e); }
 
 // The shortest text that reads back as the same double: the script's numbers are exact.
-std::string num(double v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
+std::string num(double v) { return base::shortestText(v); }
 
 // A gnuplot single-quoted string: no escapes but '' for a quote; line breaks become spaces.
 std::string quoted(const std::string& s) {
@@ -324,7 +321,7 @@ std::string gnuplotScript(const PlotSpec& spec, int width, int height, const std
 cv::Mat renderPlot(const PlotSpec& spec, int width, int height) {
   if (const char* keep = std::getenv("AMBLER_KEEP_PLOTS"); keep && *keep) {
     // Named by the script's FNV-1a digest (the journal's identity digest: 16 hex digits).
-    const std::string stem = "plot-" + identityDigest(gnuplotScript(spec, width, height, "plot.png"));
+    const std::string stem = "plot-" + base::digest(gnuplotScript(spec, width, height, "plot.png"));
     createOutDir(keep);
     writeText(fs::path(keep) / (stem + ".gp"), gnuplotScript(spec, width, height, stem + ".png"));
   }

@@ -64,7 +64,7 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
     perception::RangeImage image = j_.image;
     image.T_WS = out.believed_WS;
     const std::vector<Eigen::Vector3d> returns_j = peers::returns(image);
-    Stopwatch t;
+    base::Stopwatch t;
     const peers::PeerResult r = peers::registerPeer(returns_i_, T_WS_i_.translation(), returns_j,
                                                     out.believed_WS.translation(), peerMethod(method));
     out.seconds = t.seconds();
@@ -82,7 +82,7 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
   perception::RangeImage image = j_.image;
   image.T_WS = out.believed_WS;
   const perception::MapGrid grid_j = perception::believedGrid(map_i_.grid(), T_WS_i_, out.believed_WS);
-  Stopwatch t;
+  base::Stopwatch t;
   const bool weighted = weightedMethod(method);
   perception::RegistrationConfig config = weighted ? weighted_config_ : config_;
   config.acceptance = perception::acceptanceFor(config, T_0);  // this pair's prior

@@ -17,22 +17,13 @@
 #include "perception/elevation_map.hpp"
 #include "perception/registration.hpp"
 #include "perception/scan_to_map.hpp"
+#include "base/stopwatch.hpp"
 #include "sim/erim_scanner.hpp"
 #include "sim/ground_truth.hpp"
 #include "sim/ray_scene.hpp"
 #include "sim/world.hpp"
 
 namespace ambler::eval {
-
-class Stopwatch {
- public:
-  double seconds() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  }
-
- private:
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
-};
 
 // One view's products.
 struct ViewState {

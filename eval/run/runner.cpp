@@ -8,10 +8,9 @@ namespace ambler::eval {
 
 namespace fs = std::filesystem;
 
-std::uint64_t viewSeed(std::uint64_t seed, int view) { return base::streamKey(seed, 1000 + view); }
 
 nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
-  Stopwatch total;
+  base::Stopwatch total;
   RunState state{sc, opt.out, opt.progress};
   // No directory yet: the world stage makes it once the views are checked against the terrain,
   // so a refused scenario leaves nothing behind.

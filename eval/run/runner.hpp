@@ -18,7 +18,4 @@ struct RunOptions {
 // Throws std::runtime_error (or ScenarioError) naming the file or the cause.
 nlohmann::ordered_json runScenario(const Scenario& scenario, const RunOptions& options);
 
-// The seed of view `k`'s scan noise: independent of the terrain's streams.
-std::uint64_t viewSeed(std::uint64_t seed, int view);
-
 }  // namespace ambler::eval

@@ -13,6 +13,8 @@
 #include <string_view>
 #include <utility>
 
+#include "base/read_file.hpp"
+#include "base/text.hpp"
 #include "eval/scenario/io.hpp"
 #include "eval/scenario/message_text.hpp"
 #include "perception/sensor_geometry.hpp"
@@ -32,22 +34,16 @@ double radians(double deg) { return deg * std::numbers::pi / 180.0; }
   throw ScanError(file + ": " + (key.empty() ? "" : escapedLine(key) + ": ") + escapedLine(what));
 }
 
-// The shortest text that reads back to v.
-std::string shortest(double v) {
-  char buf[32];
-  const auto end = std::to_chars(buf, buf + sizeof buf, v).ptr;
-  return std::string(buf, end);
-}
+std::string shortest(double v) { return base::shortestText(v); }
 
 std::string readBytes(const fs::path& path) {
   std::error_code ec;
   if (!fs::is_regular_file(path, ec)) fail(path.string(), "", "cannot open file (no such file)");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path.string(), "", "cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) fail(path.string(), "", "cannot read file");
-  return text.str();
+  try {
+    return base::readFile(path);
+  } catch (const base::ReadError& e) {
+    fail(path.string(), "", e.what());
+  }
 }
 
 // The object at `key`, with exactly the keys `allowed`, all present.

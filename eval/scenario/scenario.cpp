@@ -5,6 +5,7 @@
 #include "eval/scenario/scenario.hpp"
 
 #include "base/random.hpp"
+#include "base/read_file.hpp"
 #include "perception/sensor_geometry.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -50,74 +51,38 @@ void checkGridSize(const Reader& reader, const std::string& path, double nx, dou
   }
 }
 
-terrains::TerrainSpec readTerrain(const Reader& reader, const YAML::Node& node,
-                                  const fs::path& file) {
-  const Fields f(reader, node, "terrain",
-                 {"kind", "size_m", "cell_m", "relief_m", "hurst", "slope_deg", "sinusoid", "steps",
-                  "rocks", "craters", "mjcf", "dem", "window_m", "resample_m", "centre_m",
-                  "vertical_offset_m"});
-  terrains::TerrainSpec t;
-  std::vector<std::string_view> kind_names;
-  for (const auto& [name, kind] : kKinds) kind_names.push_back(name);
-  const std::string_view kind_name =
-      reader.choice(f.required("kind"), f.pathOf("kind"), kind_names);
-  for (const auto& [name, kind] : kKinds) {
-    if (name == kind_name) t.kind = kind;
-  }
-
-  // The DEM-only keys: refused with any other kind before their values are read.
-  for (const char* key : {"dem", "window_m", "resample_m", "centre_m", "vertical_offset_m"}) {
-    if (t.kind != TerrainKind::Dem && f.get(key)) {
-      reader.fail(f.pathOf(key), "only allowed with kind: dem (kind is " + std::string(kind_name) + ")");
+// terrain.window_m, resample_m (the DEM's names of size_m and cell_m: either may be given, both
+// given must agree; docs/scenario.md, "terrain.kind: dem"), centre_m and vertical_offset_m.
+void readDemWindow(const Reader& reader, const Fields& f, const Range& size_range, const Range& cell_range,
+                   terrains::TerrainSpec& t) {
+  // The DEM window is the terrain's extent and it is resampled at the heightfield's spacing:
+  // window_m is size_m and resample_m is cell_m, named from the DEM's side. Either name may be
+  // given; both given must agree (docs/scenario.md, "terrain.kind: dem").
+  if (const auto window = f.numbers<2>("window_m", size_range)) {
+    const Eigen::Vector2d w{(*window)[0], (*window)[1]};
+    if (f.get("size_m") && w != t.size_m) {
+      reader.fail(f.pathOf("window_m"), "expected size_m ([" + shortest(t.size_m.x()) + ", " +
+                                            shortest(t.size_m.y()) +
+                                            "]) or nothing: the DEM window is the terrain's extent, got [" +
+                                            shortest(w.x()) + ", " + shortest(w.y()) + "]");
     }
+    t.size_m = w;
   }
-
-  const Range size_range{0.0, 500.0, true, false}, cell_range{0.0, 1.0, true, false};
-  if (const auto size = f.numbers<2>("size_m", size_range)) {
-    t.size_m = {(*size)[0], (*size)[1]};
-  }
-  t.cell_m = f.number("cell_m", cell_range, t.cell_m);
-  if (t.kind == TerrainKind::Dem) {
-    // The DEM window is the terrain's extent and it is resampled at the heightfield's spacing:
-    // window_m is size_m and resample_m is cell_m, named from the DEM's side. Either name may be
-    // given; both given must agree (docs/scenario.md, "terrain.kind: dem").
-    if (const auto window = f.numbers<2>("window_m", size_range)) {
-      const Eigen::Vector2d w{(*window)[0], (*window)[1]};
-      if (f.get("size_m") && w != t.size_m) {
-        reader.fail(f.pathOf("window_m"), "expected size_m ([" + shortest(t.size_m.x()) + ", " +
-                                              shortest(t.size_m.y()) +
-                                              "]) or nothing: the DEM window is the terrain's extent, got [" +
-                                              shortest(w.x()) + ", " + shortest(w.y()) + "]");
-      }
-      t.size_m = w;
+  if (f.get("resample_m")) {
+    const double r = f.number("resample_m", cell_range, t.cell_m);
+    if (f.get("cell_m") && r != t.cell_m) {
+      reader.fail(f.pathOf("resample_m"), "expected cell_m (" + shortest(t.cell_m) +
+                                              ") or nothing: the DEM is resampled at the heightfield's spacing, got " +
+                                              shortest(r));
     }
-    if (f.get("resample_m")) {
-      const double r = f.number("resample_m", cell_range, t.cell_m);
-      if (f.get("cell_m") && r != t.cell_m) {
-        reader.fail(f.pathOf("resample_m"), "expected cell_m (" + shortest(t.cell_m) +
-                                                ") or nothing: the DEM is resampled at the heightfield's spacing, got " +
-                                                shortest(r));
-      }
-      t.cell_m = r;
-    }
-    if (const auto centre = f.numbers<2>("centre_m", kAny)) t.dem_centre_m = Eigen::Vector2d{(*centre)[0], (*centre)[1]};
-    if (f.get("vertical_offset_m")) t.dem_vertical_offset_m = f.number("vertical_offset_m", kAny, 0.0);
+    t.cell_m = r;
   }
-  // Samples per side as terrains::makeTerrain counts them.
-  const double samples_x = std::round(t.size_m.x() / t.cell_m) + 1;
-  const double samples_y = std::round(t.size_m.y() / t.cell_m) + 1;
-  if (samples_x < 2 || samples_y < 2) {
-    reader.fail(f.pathOf("cell_m"), "expected at most twice the smaller side of size_m (" +
-                                        shortest(2 * t.size_m.minCoeff()) +
-                                        ") for two samples per side, got " + shortest(t.cell_m));
-  }
-  checkGridSize(reader, f.pathOf("cell_m"), samples_x, samples_y);
-  t.relief_m = f.number("relief_m", kNonNegative, t.relief_m);
-  t.hurst = f.number("hurst", {0.0, 1.0, true, true}, t.hurst);
-  if (const auto slope = f.numbers<2>("slope_deg", {-60.0, 60.0, true, true})) {
-    t.slope_deg = {(*slope)[0], (*slope)[1]};
-  }
+  if (const auto centre = f.numbers<2>("centre_m", kAny)) t.dem_centre_m = Eigen::Vector2d{(*centre)[0], (*centre)[1]};
+  if (f.get("vertical_offset_m")) t.dem_vertical_offset_m = f.number("vertical_offset_m", kAny, 0.0);
+}
 
+// terrain.sinusoid and terrain.steps (their kinds' defaults when not given).
+void readShapes(const Reader& reader, const Fields& f, terrains::TerrainSpec& t) {
   if (const auto node_s = f.get("sinusoid")) {
     const Fields s(reader, *node_s, f.pathOf("sinusoid"), {"amplitude_m", "wavelength_m"});
     terrains::SinusoidSpec spec;
@@ -147,6 +112,11 @@ terrains::TerrainSpec readTerrain(const Reader& reader, const YAML::Node& node,
     t.steps.push_back(terrains::StepSpec{});
   }
 
+}
+
+// terrain.rocks and terrain.craters (kind mars has both: the defaults unless given, as
+// terrains::makeTerrain does).
+void readRocksAndCraters(const Reader& reader, const Fields& f, terrains::TerrainSpec& t) {
   // Kind mars has rocks and craters: the defaults unless given (as terrains::makeTerrain does).
   bool rock_max_given = false;
   if (const auto node_r = f.get("rocks")) {
@@ -175,6 +145,7 @@ terrains::TerrainSpec readTerrain(const Reader& reader, const YAML::Node& node,
                     shortest(t.rocks->max_diameter_m) + (rock_max_given ? "" : " (the default)"));
   }
 
+
   if (const auto node_c = f.get("craters")) {
     const Fields c(reader, *node_c, f.pathOf("craters"),
                    {"count", "min_diameter_m", "max_diameter_m", "sfd_exponent"});
@@ -194,40 +165,77 @@ terrains::TerrainSpec readTerrain(const Reader& reader, const YAML::Node& node,
     t.craters = terrains::CraterSpec{};
   }
 
-  const auto node_m = f.get("mjcf");
-  if (t.kind != TerrainKind::Mjcf && node_m) {
-    reader.fail(f.pathOf("mjcf"),
-                "only allowed with kind: mjcf (kind is " + std::string(kind_name) + ")");
+}
+
+// The file `key` names (`what`: "an MJCF file", "a GeoTIFF DEM"; `noun`: how a missing one is
+// called), relative to the scenario's directory, stored absolute and normalised so the resolved
+// scenario reads back the same from any directory; refused when it is not there. Its contents are
+// checked by the world stage, before the run writes anything.
+std::string namedFile(const Reader& reader, const Fields& f, const char* key, const fs::path& file,
+                      const std::string& what, const std::string& noun) {
+  const std::string path = f.pathOf(key);
+  const std::string text = reader.string(f.required(key), path);
+  if (text.empty()) reader.fail(path, "expected the path of " + what + ", got ''");
+  std::error_code ec;
+  fs::path named = fs::path(text).is_absolute() ? fs::path(text) : file.parent_path() / text;
+  named = fs::absolute(named, ec).lexically_normal();
+  if (ec || !fs::is_regular_file(named, ec)) {
+    reader.fail(path, "cannot find the " + noun + " " + inQuotes(text) + " (looked for " + named.string() + ")");
   }
-  if (t.kind == TerrainKind::Mjcf) {
-    const std::string path = f.pathOf("mjcf");
-    const std::string text = reader.string(f.required("mjcf"), path);
-    if (text.empty()) reader.fail(path, "expected the path of an MJCF file, got ''");
-    // Absolute and normalised, so the resolved scenario reads back the same from any directory.
-    std::error_code ec;
-    fs::path world = fs::path(text).is_absolute() ? fs::path(text) : file.parent_path() / text;
-    world = fs::absolute(world, ec).lexically_normal();
-    if (ec || !fs::is_regular_file(world, ec)) {
-      reader.fail(path, "cannot find the MJCF file " + inQuotes(text) + " (looked for " +
-                            world.string() + ")");
+  return named.string();
+}
+
+terrains::TerrainSpec readTerrain(const Reader& reader, const YAML::Node& node,
+                                  const fs::path& file) {
+  const Fields f(reader, node, "terrain",
+                 {"kind", "size_m", "cell_m", "relief_m", "hurst", "slope_deg", "sinusoid", "steps",
+                  "rocks", "craters", "mjcf", "dem", "window_m", "resample_m", "centre_m",
+                  "vertical_offset_m"});
+  terrains::TerrainSpec t;
+  std::vector<std::string_view> kind_names;
+  for (const auto& [name, kind] : kKinds) kind_names.push_back(name);
+  const std::string_view kind_name =
+      reader.choice(f.required("kind"), f.pathOf("kind"), kind_names);
+  for (const auto& [name, kind] : kKinds) {
+    if (name == kind_name) t.kind = kind;
+  }
+
+  // The DEM-only keys: refused with any other kind before their values are read.
+  for (const char* key : {"dem", "window_m", "resample_m", "centre_m", "vertical_offset_m"}) {
+    if (t.kind != TerrainKind::Dem && f.get(key)) {
+      reader.fail(f.pathOf(key), "only allowed with kind: dem (kind is " + std::string(kind_name) + ")");
     }
-    t.mjcf = world.string();
   }
-  if (t.kind == TerrainKind::Dem) {
-    // As mjcf: relative to the scenario's directory, stored absolute and normalised. The file's
-    // contents (GeoTIFF, CRS, nodata, window) are checked by the world stage (eval/geo/dem.hpp), before
-    // the run writes anything.
-    const std::string path = f.pathOf("dem");
-    const std::string text = reader.string(f.required("dem"), path);
-    if (text.empty()) reader.fail(path, "expected the path of a GeoTIFF DEM, got ''");
-    std::error_code ec;
-    fs::path dem = fs::path(text).is_absolute() ? fs::path(text) : file.parent_path() / text;
-    dem = fs::absolute(dem, ec).lexically_normal();
-    if (ec || !fs::is_regular_file(dem, ec)) {
-      reader.fail(path, "cannot find the DEM file " + inQuotes(text) + " (looked for " + dem.string() + ")");
-    }
-    t.dem = dem.string();
+
+  const Range size_range{0.0, 500.0, true, false}, cell_range{0.0, 1.0, true, false};
+  if (const auto size = f.numbers<2>("size_m", size_range)) {
+    t.size_m = {(*size)[0], (*size)[1]};
   }
+  t.cell_m = f.number("cell_m", cell_range, t.cell_m);
+  if (t.kind == TerrainKind::Dem) readDemWindow(reader, f, size_range, cell_range, t);
+  // Samples per side as terrains::makeTerrain counts them.
+  const double samples_x = std::round(t.size_m.x() / t.cell_m) + 1;
+  const double samples_y = std::round(t.size_m.y() / t.cell_m) + 1;
+  if (samples_x < 2 || samples_y < 2) {
+    reader.fail(f.pathOf("cell_m"), "expected at most twice the smaller side of size_m (" +
+                                        shortest(2 * t.size_m.minCoeff()) +
+                                        ") for two samples per side, got " + shortest(t.cell_m));
+  }
+  checkGridSize(reader, f.pathOf("cell_m"), samples_x, samples_y);
+  t.relief_m = f.number("relief_m", kNonNegative, t.relief_m);
+  t.hurst = f.number("hurst", {0.0, 1.0, true, true}, t.hurst);
+  if (const auto slope = f.numbers<2>("slope_deg", {-60.0, 60.0, true, true})) {
+    t.slope_deg = {(*slope)[0], (*slope)[1]};
+  }
+
+  readShapes(reader, f, t);
+  readRocksAndCraters(reader, f, t);
+
+  if (t.kind != TerrainKind::Mjcf && f.get("mjcf")) {
+    reader.fail(f.pathOf("mjcf"), "only allowed with kind: mjcf (kind is " + std::string(kind_name) + ")");
+  }
+  if (t.kind == TerrainKind::Mjcf) t.mjcf = namedFile(reader, f, "mjcf", file, "an MJCF file", "MJCF file");
+  if (t.kind == TerrainKind::Dem) t.dem = namedFile(reader, f, "dem", file, "a GeoTIFF DEM", "DEM file");
   return t;
 }
 
@@ -643,13 +651,13 @@ Scenario parseScenario(const std::string& yaml_text, const fs::path& file) {
 }
 
 Scenario loadScenario(const fs::path& file) {
-  std::error_code ec;
-  std::ifstream in(file, std::ios::binary);
-  if (!in || fs::is_directory(file, ec)) throw ScenarioError(file.string() + ": cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw ScenarioError(file.string() + ": cannot read file");
-  return parseScenario(text.str(), file);
+  std::string text;
+  try {
+    text = base::readFile(file);
+  } catch (const base::ReadError& e) {
+    throw ScenarioError(file.string() + ": " + e.what());
+  }
+  return parseScenario(text, file);
 }
 
 }  // namespace ambler::eval

@@ -26,7 +26,8 @@ constexpr std::array<std::pair<std::string_view, TerrainKind>, 7> kKinds{{
 }};
 
 // Number text, defined in scenario_writer.cpp: degToRad is how the reader turns degrees into
-// radians, and shortest and degreesText write them back so that they read back bit for bit.
+// radians, and shortest (base::plainText) and degreesText write them back so that they read back
+// bit for bit.
 double degToRad(double deg);
 std::string shortest(double v);
 std::string degreesText(double rad);

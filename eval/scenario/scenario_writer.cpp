@@ -15,6 +15,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/text.hpp"
 #include "eval/scenario/scenario_internal.hpp"
 
 namespace ambler::eval {
@@ -35,17 +36,7 @@ namespace scenario_detail {
 // the default radians.
 double degToRad(double deg) { return deg * std::numbers::pi / 180.0; }
 
-// The shortest text that reads back as the same double, in fixed notation where that is how a
-// person would write it (0.0003, 40) and in scientific notation otherwise (1e-05, 1e+21).
-std::string shortest(double v) {
-  std::array<char, 64> buf{};  // fixed: at most 16 digits before the point and 21 after it
-  const double magnitude = std::abs(v);
-  const auto format = (magnitude == 0.0 || (magnitude >= 1e-4 && magnitude < 1e16))
-                          ? std::chars_format::fixed
-                          : std::chars_format::scientific;
-  const auto end = std::to_chars(buf.data(), buf.data() + buf.size(), v, format).ptr;
-  return std::string(buf.data(), end);
-}
+std::string shortest(double v) { return base::plainText(v); }
 
 // The shortest degree text that degToRad maps back to exactly `rad`. Degrees are read as doubles
 // and converted with one rounding per operation, so every parsed angle has such a text within a
@@ -91,15 +82,12 @@ std::string list(std::initializer_list<std::string> items) {
 
 }  // namespace
 
-std::string resolvedYaml(const Scenario& s) {
-  const auto num = [](double v) { return shortest(v); };
-  const auto deg = [](double rad) { return degreesText(rad); };
-  std::string y = "# every key written out, defaults filled in (docs/scenario.md)\n";
-  y += "name: " + yamlQuoted(s.name) + "\n";
-  y += "description: " + yamlQuoted(s.description) + "\n";
-  y += "seed: " + std::to_string(s.seed) + "\n";
+namespace {
 
-  const auto& t = s.terrain;
+// `terrain:` with every key (a DEM's window as window_m and resample_m).
+std::string terrainYaml(const terrains::TerrainSpec& t) {
+  const auto num = [](double v) { return shortest(v); };
+  std::string y;
   std::string kind;
   for (const auto& [name, k] : kKinds) {
     if (k == t.kind) kind = name;
@@ -141,7 +129,14 @@ std::string resolvedYaml(const Scenario& s) {
     if (t.dem_vertical_offset_m) y += "  vertical_offset_m: " + num(*t.dem_vertical_offset_m) + "\n";
   }
 
-  const auto& c = s.sensor;
+  return y;
+}
+
+// `sensor:` with every key, angles in degrees.
+std::string sensorYaml(const perception::SensorModel& c) {
+  const auto num = [](double v) { return shortest(v); };
+  const auto deg = [](double rad) { return degreesText(rad); };
+  std::string y;
   y += "sensor:\n";
   y += "  rows: " + std::to_string(c.rows) + "\n";
   y += "  cols: " + std::to_string(c.cols) + "\n";
@@ -153,7 +148,48 @@ std::string resolvedYaml(const Scenario& s) {
   y += "  max_range_m: " + num(c.max_range_m) + "\n";
   y += "  beam_divergence_deg: " + deg(c.beam_divergence_rad) + "\n";
   y += "  dropout: " + num(c.dropout) + "\n";
+  return y;
+}
 
+// `matching:` with every key; the initial error only when it is given, not drawn.
+std::string matchingYaml(const MatchingSpec& m) {
+  const auto num = [](double v) { return shortest(v); };
+  const auto deg = [](double rad) { return degreesText(rad); };
+  std::string y;
+  y += "matching:\n  pairs: [";
+  for (std::size_t i = 0; i < m.pairs.size(); ++i)
+    y += (i ? ", " : "") + list({std::to_string(m.pairs[i].first), std::to_string(m.pairs[i].second)});
+  y += "]\n  methods: [";
+  for (std::size_t i = 0; i < m.methods.size(); ++i) y += std::string(i ? ", " : "") + matchMethodName(m.methods[i]);
+  const auto& e = m.initial_error;
+  y += "]\n";
+  if (!m.draw_initial_error)  // drawn, it is the odometry model's (and initial_error may not be given)
+    y += "  initial_error: {xyz_m: " + list({num(e.xyz_m.x()), num(e.xyz_m.y()), num(e.xyz_m.z())}) +
+         ", rpy_deg: " + list({deg(e.rpy_rad.x()), deg(e.rpy_rad.y()), deg(e.rpy_rad.z())}) + "}\n";
+  y += "  success: {translation_m: " + num(m.success_translation_m) + ", rotation_deg: " +
+       num(m.success_rotation_deg) + "}\n";
+  y += "  prior: {translation_m: " + num(m.prior_translation_m) + ", rotation_deg: " + num(m.prior_rotation_deg) + "}\n";
+  const perception::OdometryModel& o = m.odometry;
+  y += "  odometry: {translation_per_m: " + num(o.translation_per_m) + ", translation_floor_m: " +
+       num(o.translation_floor_m) + ", heading_deg_per_m: " + num(o.heading_deg_per_m) +
+       ", heading_floor_deg: " + num(o.heading_floor_deg) + "}\n";
+  y += std::string("  gate: ") + (m.gate_by_prior ? "prior" : "odometry") + "\n";
+  y += std::string("  draw_initial_error: ") + (m.draw_initial_error ? "true" : "false") + "\n";
+  return y;
+}
+
+}  // namespace
+
+std::string resolvedYaml(const Scenario& s) {
+  const auto num = [](double v) { return shortest(v); };
+  const auto deg = [](double rad) { return degreesText(rad); };
+  std::string y = "# every key written out, defaults filled in (docs/scenario.md)\n";
+  y += "name: " + yamlQuoted(s.name) + "\n";
+  y += "description: " + yamlQuoted(s.description) + "\n";
+  y += "seed: " + std::to_string(s.seed) + "\n";
+
+  y += terrainYaml(s.terrain);
+  y += sensorYaml(s.sensor);
   y += "views:\n";
   for (const auto& v : s.views) {
     y += "  - {xyz_m: " + list({num(v.xyz_m.x()), num(v.xyz_m.y()), num(v.xyz_m.z())}) +
@@ -170,28 +206,7 @@ std::string resolvedYaml(const Scenario& s) {
     y += std::string("  shadows: ") + shadowsName(m.shadows) + "\n";
     y += std::string("  baseline: ") + baselineName(m.baseline) + "\n";
   }
-  if (s.matching) {
-    const auto& m = *s.matching;
-    y += "matching:\n  pairs: [";
-    for (std::size_t i = 0; i < m.pairs.size(); ++i)
-      y += (i ? ", " : "") + list({std::to_string(m.pairs[i].first), std::to_string(m.pairs[i].second)});
-    y += "]\n  methods: [";
-    for (std::size_t i = 0; i < m.methods.size(); ++i) y += std::string(i ? ", " : "") + matchMethodName(m.methods[i]);
-    const auto& e = m.initial_error;
-    y += "]\n";
-    if (!m.draw_initial_error)  // drawn, it is the odometry model's (and initial_error may not be given)
-      y += "  initial_error: {xyz_m: " + list({num(e.xyz_m.x()), num(e.xyz_m.y()), num(e.xyz_m.z())}) +
-           ", rpy_deg: " + list({deg(e.rpy_rad.x()), deg(e.rpy_rad.y()), deg(e.rpy_rad.z())}) + "}\n";
-    y += "  success: {translation_m: " + num(m.success_translation_m) + ", rotation_deg: " +
-         num(m.success_rotation_deg) + "}\n";
-    y += "  prior: {translation_m: " + num(m.prior_translation_m) + ", rotation_deg: " + num(m.prior_rotation_deg) + "}\n";
-    const perception::OdometryModel& o = m.odometry;
-    y += "  odometry: {translation_per_m: " + num(o.translation_per_m) + ", translation_floor_m: " +
-         num(o.translation_floor_m) + ", heading_deg_per_m: " + num(o.heading_deg_per_m) +
-         ", heading_floor_deg: " + num(o.heading_floor_deg) + "}\n";
-    y += std::string("  gate: ") + (m.gate_by_prior ? "prior" : "odometry") + "\n";
-    y += std::string("  draw_initial_error: ") + (m.draw_initial_error ? "true" : "false") + "\n";
-  }
+  if (s.matching) y += matchingYaml(*s.matching);
   if (s.merge) {
     const auto& m = *s.merge;
     y += std::string("merge:\n  poses: ") + mergePosesName(m.poses) + "\n";

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "eval/scenario/io.hpp"
@@ -146,25 +148,41 @@ MapMetrics mapMetrics(const perception::ElevationMap& map, const perception::Ele
   return m;
 }
 
+namespace {
+
+// The named figures of `m`, in the order given, into `j` (NaN → null): the three entries of
+// metrics.json that a map's metrics fill differ only in which and in what order.
+void putFigures(nlohmann::ordered_json& j, const MapMetrics& m, std::initializer_list<std::string_view> names) {
+  for (const std::string_view name : names) {
+    const std::string key(name);
+    if (name == "cells") j[key] = m.cells;
+    else if (name == "known") j[key] = m.known;
+    else if (name == "shadow") j[key] = m.shadow;
+    else if (name == "visible") j[key] = m.visible;
+    else if (name == "hidden") j[key] = m.hidden;
+    else if (name == "compared") j[key] = m.compared;
+    else if (name == "known_in_shadow_above_3sigma") j[key] = m.known_in_shadow_above_3sigma;
+    else if (name == "coverage") j[key] = jsonNumber(m.coverage);
+    else if (name == "rms_error_m") j[key] = jsonNumber(m.rms_error_m);
+    else if (name == "median_abs_error_m") j[key] = jsonNumber(m.median_abs_error_m);
+    else if (name == "p95_abs_error_m") j[key] = jsonNumber(m.p95_abs_error_m);
+    else if (name == "max_abs_error_m") j[key] = jsonNumber(m.max_abs_error_m);
+    else if (name == "shadow_precision") j[key] = jsonNumber(m.shadow_precision);
+    else if (name == "shadow_recall") j[key] = jsonNumber(m.shadow_recall);
+    else if (name == "within_1sigma") j[key] = jsonNumber(m.within_1sigma);
+    else if (name == "within_2sigma") j[key] = jsonNumber(m.within_2sigma);
+    else throw std::logic_error("putFigures: no figure " + key);
+  }
+}
+
+}  // namespace
+
 nlohmann::ordered_json toJson(const MapMetrics& m, int view) {
   nlohmann::ordered_json j;
   j["view"] = view;
-  j["cells"] = m.cells;
-  j["coverage"] = jsonNumber(m.coverage);
-  j["rms_error_m"] = jsonNumber(m.rms_error_m);
-  j["median_abs_error_m"] = jsonNumber(m.median_abs_error_m);
-  j["shadow_precision"] = jsonNumber(m.shadow_precision);
-  j["shadow_recall"] = jsonNumber(m.shadow_recall);
-  j["within_1sigma"] = jsonNumber(m.within_1sigma);
-  j["within_2sigma"] = jsonNumber(m.within_2sigma);
-  j["known"] = m.known;
-  j["max_abs_error_m"] = jsonNumber(m.max_abs_error_m);
-  j["p95_abs_error_m"] = jsonNumber(m.p95_abs_error_m);
-  j["known_in_shadow_above_3sigma"] = m.known_in_shadow_above_3sigma;
-  j["shadow"] = m.shadow;
-  j["visible"] = m.visible;
-  j["hidden"] = m.hidden;
-  j["compared"] = m.compared;
+  putFigures(j, m, {"cells", "coverage", "rms_error_m", "median_abs_error_m", "shadow_precision", "shadow_recall",
+                    "within_1sigma", "within_2sigma", "known", "max_abs_error_m", "p95_abs_error_m",
+                    "known_in_shadow_above_3sigma", "shadow", "visible", "hidden", "compared"});
   if (!m.bands.empty()) j["by_range"] = bandsJson(m.bands);
   return j;
 }
@@ -172,16 +190,8 @@ nlohmann::ordered_json toJson(const MapMetrics& m, int view) {
 nlohmann::ordered_json cartesianJson(const MapMetrics& m, int view) {
   nlohmann::ordered_json j;
   j["view"] = view;
-  j["coverage"] = jsonNumber(m.coverage);
-  j["rms_error_m"] = jsonNumber(m.rms_error_m);
-  j["median_abs_error_m"] = jsonNumber(m.median_abs_error_m);
-  j["cells"] = m.cells;
-  j["known"] = m.known;
-  j["max_abs_error_m"] = jsonNumber(m.max_abs_error_m);
-  j["p95_abs_error_m"] = jsonNumber(m.p95_abs_error_m);
-  j["within_1sigma"] = jsonNumber(m.within_1sigma);
-  j["within_2sigma"] = jsonNumber(m.within_2sigma);
-  j["compared"] = m.compared;
+  putFigures(j, m, {"coverage", "rms_error_m", "median_abs_error_m", "cells", "known", "max_abs_error_m",
+                    "p95_abs_error_m", "within_1sigma", "within_2sigma", "compared"});
   if (!m.bands.empty()) j["by_range"] = bandsJson(m.bands);
   return j;
 }
@@ -190,17 +200,8 @@ nlohmann::ordered_json compositeJson(const MapMetrics& m, int views, const char*
   nlohmann::ordered_json j;
   j["views"] = views;
   j["poses"] = poses;
-  j["cells"] = m.cells;
-  j["coverage"] = jsonNumber(m.coverage);
-  j["rms_error_m"] = jsonNumber(m.rms_error_m);
-  j["median_abs_error_m"] = jsonNumber(m.median_abs_error_m);
-  j["within_1sigma"] = jsonNumber(m.within_1sigma);
-  j["within_2sigma"] = jsonNumber(m.within_2sigma);
-  j["known"] = m.known;
-  j["shadow"] = m.shadow;
-  j["compared"] = m.compared;
-  j["p95_abs_error_m"] = jsonNumber(m.p95_abs_error_m);
-  j["max_abs_error_m"] = jsonNumber(m.max_abs_error_m);
+  putFigures(j, m, {"cells", "coverage", "rms_error_m", "median_abs_error_m", "within_1sigma", "within_2sigma",
+                    "known", "shadow", "compared", "p95_abs_error_m", "max_abs_error_m"});
   return j;
 }
 

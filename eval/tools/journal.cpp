@@ -44,15 +44,6 @@ std::uint32_t crc32(std::string_view bytes) {
   return c ^ 0xFFFFFFFFU;
 }
 
-std::string identityDigest(std::string_view text) {
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  for (const char ch : text) {
-    h ^= std::uint8_t(ch);
-    h *= 0x100000001b3ULL;
-  }
-  return hex(h, 16);
-}
-
 JournalContents parseJournal(std::string_view text, const std::filesystem::path& file, std::string_view identity,
                              std::size_t items) {
   const std::string where = file.string() + ": ";

@@ -30,9 +30,6 @@ struct JournalError : std::runtime_error {
 // CRC-32 (IEEE 802.3, the polynomial of zlib and PNG) of `bytes`.
 std::uint32_t crc32(std::string_view bytes);
 
-// A 16-hex-digit digest of `text` (FNV-1a, 64 bits): a journal's identity from the text that
-// defines its items, so a journal of another sweep is refused.
-std::string identityDigest(std::string_view text);
 
 struct JournalContents {
   std::map<std::size_t, std::string> records;  // item -> payload

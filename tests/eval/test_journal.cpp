@@ -168,12 +168,6 @@ TEST(Journal, AFailedAppendLeavesTheRecordsBeforeItWhole) {
   EXPECT_EQ(parseJournal(slurp(file), "j", "id1", 2).records.size(), 2U);
 }
 
-TEST(Journal, IdentityDigestIsFnv1a64) {
-  // FNV-1a 64's published test vectors.
-  EXPECT_EQ(identityDigest(""), "cbf29ce484222325");
-  EXPECT_EQ(identityDigest("a"), "af63dc4c8601ec8c");
-}
-
 TEST(Progress, ClockText) {
   EXPECT_EQ(clockText(0), "0:00");
   EXPECT_EQ(clockText(59.4), "0:59");

@@ -287,7 +287,7 @@ TEST(Sweep, SweepFileErrorsNameFileAndKey) {
     try {
       parseShard(bad);
       ADD_FAILURE() << bad;
-    } catch (const SweepError& e) {
+    } catch (const ShardError& e) {
       EXPECT_TRUE(std::string(e.what()).starts_with("--shard: expected K/N")) << e.what();
     }
   }

@@ -15,7 +15,9 @@
 
 #include "eval/scenario/io.hpp"
 #include "eval/tools/sweep/sweep.hpp"
-#include "eval/tools/sweep/sweep_internal.hpp"
+#include "base/read_file.hpp"
+#include "base/text.hpp"
+#include "eval/tools/shards.hpp"
 #include "fuzz_support.hpp"
 
 namespace {
@@ -45,22 +47,22 @@ void roundTrip(const std::string& text) {
   const auto records = eval::parseResultsCsv(text);
   if (!records) return;
   std::string again;
-  for (const auto& r : *records) again += eval::sweep_detail::csvLine(r);
+  for (const auto& r : *records) again += eval::csvLine(r);
   const auto back = eval::parseResultsCsv(again);
   if (!back || *back != *records) fuzz::finding("CSV records do not read back the same after csvLine");
 }
 
 void merge(const std::string& text) {
-  std::vector<std::string> pieces = eval::sweep_detail::split(text, '\f');
+  std::vector<std::string> pieces = base::split(text, '\f');
   if (pieces.size() > 4) return;
   const fs::path& dir = workDir();
   for (const auto& entry : fs::directory_iterator(dir)) fs::remove(entry.path());
   const int n = int(pieces.size());
   for (int k = 1; k <= n; ++k)
-    eval::writeText(dir / eval::sweep_detail::shardName(eval::Shard{k, n}), pieces[std::size_t(k - 1)]);
+    eval::writeText(dir / eval::shardName(eval::Shard{k, n}, "results"), pieces[std::size_t(k - 1)]);
   try {
     const fs::path csv = eval::mergeSweep(sweep(), dir, false);
-    const auto records = eval::parseResultsCsv(ambler::eval::sweep_detail::readText(csv, csv.string()));
+    const auto records = eval::parseResultsCsv(base::readFile(csv));
     if (!records || records->size() != sweep().runs.size() + 1)
       fuzz::finding("a merged results.csv without one row per run");
   } catch (const eval::SweepError& e) {

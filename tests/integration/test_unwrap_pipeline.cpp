@@ -14,7 +14,8 @@
 #include <string>
 
 #include "perception/scan_to_map.hpp"
-#include "eval/run/runner.hpp"
+#include "base/random.hpp"
+#include "eval/scenario/scenario.hpp"
 #include "perception/range_edges.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "sim/erim_scanner.hpp"
@@ -99,7 +100,7 @@ TEST(UnwrapSideways, FoldedNearFieldIsUnwrappedAndMappedRight) {
     sensor.noise_k = nc.k;
     sensor.mixed_pixels = false;
     const Eigen::Isometry3d T_WS = perception::sensorPose(view.xyz_m, view.rpy_rad);
-    const sim::Scan scan = sim::ErimScanner(plane.scene, sensor).scan(T_WS, eval::viewSeed(nc.seed, 0));
+    const sim::Scan scan = sim::ErimScanner(plane.scene, sensor).scan(T_WS, base::viewSeed(nc.seed, 0));
     const perception::RangeImage& measured = scan.image;
     const int rows = measured.rows(), cols = measured.cols();
     const perception::ScanMap b = perception::scanToMap(measured, sensor, T_WS, grid, map.scanToMapConfig());

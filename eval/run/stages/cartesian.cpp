@@ -24,7 +24,7 @@ void run(RunState& s) {
     std::optional<perception::ElevationMap> best;
     std::optional<MapMetrics> best_m;
     std::string best_fill;
-    Stopwatch t;
+    base::Stopwatch t;
     for (const auto& [fill, name] : {std::pair{perception::GapFill::Nearest, "nearest"},
                                      std::pair{perception::GapFill::Linear, "linear"}}) {
       perception::CartesianConfig config;

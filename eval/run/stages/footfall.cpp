@@ -73,7 +73,7 @@ void run(RunState& s) {
   const perception::CellRegion region = spec.candidates(grid);
   perception::FootfallConfig config;
   config.foot_diameter_m = spec.foot_diameter_m;
-  Stopwatch t;
+  base::Stopwatch t;
   const std::vector<perception::FootfallScores> scores = perception::evaluateFootfalls(map, region, config, spec.methods);
   s.addTime("footfall", t.seconds());
   // The true surface scored by the same criteria: σ 0, every cell known.

@@ -53,7 +53,7 @@ void run(RunState& s) {
       for (const char* key : {"tilt_deg", "sink_m", "slip_m"}) j[key] = nullptr;
       j["settled"] = false;
     } else {
-      Stopwatch t;
+      base::Stopwatch t;
       const sim::LegOutcome o = sim::stepLeg(s.world_xml, c.x_m, c.y_m, config);
       s.addTime("leg", t.seconds());
       const auto rest = sim::restingDisk(heights, grid.cell, x0, y0, c.x_m, c.y_m, config.foot_diameter_m);

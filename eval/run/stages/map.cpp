@@ -23,7 +23,7 @@ void run(RunState& s) {
     ViewState& view = s.views[k];
     view.truth = truth;
     view.visibility = s.truth->visibility(*view.truth, view.T_WS, sc.sensor);
-    Stopwatch t;
+    base::Stopwatch t;
     view.locus = perception::scanToMap(view.scan->image, sc.sensor, view.T_WS, grid, config);
     s.addTime("map", t.seconds());
     const Eigen::Vector3d sensor_position = view.T_WS.translation();

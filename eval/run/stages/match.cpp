@@ -114,6 +114,77 @@ void pairPictures(const RunState& s, int i, int j, const Eigen::Isometry3d& beli
 }
 // ---- End of the pictures.
 
+// The two-stage methods' verification (pair JSON "verification"): each hypothesis with its cost
+// and, for scoring only, where sensor J would be from its start and from its refinement.
+nlohmann::ordered_json verificationJson(const perception::RegistrationResult& reg, const Eigen::Isometry3d& T_IJ,
+                                        const Eigen::Isometry3d& T_WS_i, const Eigen::Isometry3d& believed_WS) {
+  nlohmann::ordered_json hs = nlohmann::ordered_json::array();
+  for (std::size_t k = 0; k < reg.hypotheses.size(); ++k) {
+    const perception::RegistrationHypothesis& h = reg.hypotheses[k];
+    // Scoring only: where sensor J would be from the start and from its refinement.
+    const auto error = [&](const perception::PoseVector& nu) {
+      return perception::poseError(T_IJ, T_WS_i.inverse() * perception::poseFromVector(nu).inverse() * believed_WS);
+    };
+    const perception::PoseError e0 = error(h.nu0), e1 = error(h.nu);
+    hs.push_back({{"start", h.start},
+                  {"stage", h.stage},
+                  {"D_m", h.D_m},
+                  {"iterations", h.iterations},
+                  {"cost", h.cost},
+                  {"chosen", int(k) == reg.chosen},
+                  {"start_translation_error_m", e0.translation_m},
+                  {"start_rotation_error_deg", e0.rotation_deg},
+                  {"translation_error_m", e1.translation_m},
+                  {"rotation_error_deg", e1.rotation_deg}});
+  }
+  return {{"common_lines", reg.common_lines}, {"hypotheses", hs}};
+}
+
+// The feature stage (pair JSON "feature_matching"); D_true_m, eq. 3 at the true transform, is
+// scoring only: whether a failure is the search's or the verification's.
+nlohmann::ordered_json featureMatchingJson(const perception::RegistrationResult& reg,
+                                           const perception::MapGrid& grid_j, const Eigen::Isometry3d& believed_WS,
+                                           const Eigen::Isometry3d& T_WS_j, const perception::FeatureMatchConfig& match) {
+  const perception::FeatureMatch& fm = *reg.feature_match;
+  nlohmann::ordered_json f;
+  f["features_i"] = featuresJson(reg.features_i);
+  f["features_j"] = featuresJson(reg.features_j);
+  f["T_WM_j"] = matrixJson(grid_j.T_WM.matrix());
+  f["found"] = fm.found;
+  f["D_m"] = fm.D;
+  f["D_initial_m"] = fm.D0;
+  // Eq. 3 at the true transform (world → believed world), and its pairing.
+  std::vector<std::pair<int, int>> true_pairs;
+  f["D_true_m"] = perception::featureDistanceSum(reg.features_i, reg.features_j, *reg.map_j,
+                                                 grid_j.T_WM.inverse() * believed_WS * T_WS_j.inverse(),
+                                                 match, &true_pairs);
+  f["pairs_true"] = true_pairs.size();
+  nlohmann::ordered_json pairs = nlohmann::ordered_json::array();
+  for (const auto& [a, b] : fm.pairs) pairs.push_back({a, b});
+  f["pairs"] = pairs;
+  f["rotation_sigma_deg"] = fm.rotation_sigma_deg;
+  f["nodes"] = fm.nodes;
+  f["hypotheses"] = fm.hypotheses;
+  f["exhausted"] = fm.exhausted;
+  return f;
+}
+
+// Fig. 5: map J's features moved into map I's frame by T_F (M_J → M_I: T_F⁻¹), over map I:
+// matching/pair_I_J_correspondence_METHOD.png.
+void writeCorrespondencePicture(const RunState& s, int i, int j, const std::string& name,
+                                const perception::RegistrationResult& reg) {
+  const perception::FeatureMatch& fm = *reg.feature_match;
+  const perception::ElevationMap& map_i = s.views[i].locus->map;
+  std::vector<perception::Feature> moved;
+  const Eigen::Isometry3d T_F_inv = perception::poseFromVector(fm.nu).inverse();
+  for (const perception::Feature& fj : reg.features_j) moved.push_back(perception::transformed(fj, T_F_inv));
+  writePng(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_correspondence_" +
+                                 methodFileName(name) + ".png"),
+           correspondencePicture(map_i, reg.features_i, moved, fm.pairs,
+                                 s.scenario.name + ": views " + std::to_string(i) + "-" + std::to_string(j) +
+                                     ", features after T_F (" + name + ")"));
+}
+
 void run(RunState& s) {
   const Scenario& sc = s.scenario;
   const MatchingSpec& spec = *sc.matching;
@@ -170,61 +241,10 @@ void run(RunState& s) {
       pair["reject_reasons"] = a.reject_reasons;
       pair["false_accept"] = a.accepted && !success;
       pair["assessment"] = assessmentJson(a);
-      if (!reg.hypotheses.empty()) {
-        nlohmann::ordered_json hs = nlohmann::ordered_json::array();
-        for (std::size_t k = 0; k < reg.hypotheses.size(); ++k) {
-          const perception::RegistrationHypothesis& h = reg.hypotheses[k];
-          // Scoring only: where sensor J would be from the start and from its refinement.
-          const auto error = [&](const perception::PoseVector& nu) {
-            return perception::poseError(T_IJ, vi.T_WS.inverse() * perception::poseFromVector(nu).inverse() * believed_WS);
-          };
-          const perception::PoseError e0 = error(h.nu0), e1 = error(h.nu);
-          hs.push_back({{"start", h.start},
-                        {"stage", h.stage},
-                        {"D_m", h.D_m},
-                        {"iterations", h.iterations},
-                        {"cost", h.cost},
-                        {"chosen", int(k) == reg.chosen},
-                        {"start_translation_error_m", e0.translation_m},
-                        {"start_rotation_error_deg", e0.rotation_deg},
-                        {"translation_error_m", e1.translation_m},
-                        {"rotation_error_deg", e1.rotation_deg}});
-        }
-        pair["verification"] = {{"common_lines", reg.common_lines}, {"hypotheses", hs}};
-      }
+      if (!reg.hypotheses.empty()) pair["verification"] = verificationJson(reg, T_IJ, vi.T_WS, believed_WS);
       if (reg.feature_match) {
-        const perception::FeatureMatch& fm = *reg.feature_match;
-        nlohmann::ordered_json f;
-        f["features_i"] = featuresJson(reg.features_i);
-        f["features_j"] = featuresJson(reg.features_j);
-        f["T_WM_j"] = matrixJson(grid_j.T_WM.matrix());
-        f["found"] = fm.found;
-        f["D_m"] = fm.D;
-        f["D_initial_m"] = fm.D0;
-        // Scoring only: eq. 3 at the true transform (world → believed world), and its pairing:
-        // whether a failure is the search's or the verification's.
-        std::vector<std::pair<int, int>> true_pairs;
-        f["D_true_m"] = perception::featureDistanceSum(reg.features_i, reg.features_j, *reg.map_j,
-                                                       grid_j.T_WM.inverse() * believed_WS * vj.T_WS.inverse(),
-                                                       config.match, &true_pairs);
-        f["pairs_true"] = true_pairs.size();
-        nlohmann::ordered_json pairs = nlohmann::ordered_json::array();
-        for (const auto& [a, b] : fm.pairs) pairs.push_back({a, b});
-        f["pairs"] = pairs;
-        f["rotation_sigma_deg"] = fm.rotation_sigma_deg;
-        f["nodes"] = fm.nodes;
-        f["hypotheses"] = fm.hypotheses;
-        f["exhausted"] = fm.exhausted;
-        pair["feature_matching"] = f;
-        // Fig. 5: map J's features moved into map I's frame by T_F (M_J → M_I: T_F⁻¹).
-        std::vector<perception::Feature> moved;
-        const Eigen::Isometry3d T_F_inv = perception::poseFromVector(fm.nu).inverse();
-        for (const perception::Feature& fj : reg.features_j) moved.push_back(perception::transformed(fj, T_F_inv));
-        writePng(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_correspondence_" +
-                                       methodFileName(name) + ".png"),
-                 correspondencePicture(map_i, reg.features_i, moved, fm.pairs,
-                                       sc.name + ": views " + std::to_string(i) + "-" + std::to_string(j) +
-                                           ", features after T_F (" + name + ")"));
+        pair["feature_matching"] = featureMatchingJson(reg, grid_j, believed_WS, vj.T_WS, config.match);
+        writeCorrespondencePicture(s, i, j, name, reg);
       }
       nlohmann::ordered_json trace = nlohmann::ordered_json::array();
       for (std::size_t k = 0; k < res.rms_m.size(); ++k)

@@ -21,7 +21,7 @@ void run(RunState& s) {
   const Scenario& sc = s.scenario;
   const MergeSpec& spec = *sc.merge;
   const perception::MapGrid grid = spec.grid();
-  Stopwatch t;
+  base::Stopwatch t;
   // Matched poses: view 0 at its true pose (the composite's frame is view 0's world), the others
   // chained through the first listed method's registrations that the rover accepted; a view no
   // accepted registration reaches is left out. Only a calibrated covariance is propagated.

@@ -34,8 +34,8 @@ void run(RunState& s) {
     const ViewSpec& v = sc.views[k];
     ViewState& view = s.views[k];
     view.T_WS = perception::sensorPose(v.xyz_m, v.rpy_rad);
-    Stopwatch t;
-    view.scan = scanner.scan(view.T_WS, viewSeed(sc.seed, k));
+    base::Stopwatch t;
+    view.scan = scanner.scan(view.T_WS, base::viewSeed(sc.seed, k));
     s.addTime("scan", t.seconds());
     const sim::Scan& scan = *view.scan;
     const std::filesystem::path base = s.out / "scans" / viewName(k);

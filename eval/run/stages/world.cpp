@@ -9,7 +9,7 @@
 #include "eval/geo/dem.hpp"
 #include "eval/pictures/figures.hpp"
 #include "eval/scenario/io.hpp"
-#include "eval/scenario/scenario_internal.hpp"
+#include "base/text.hpp"
 #include "eval/run/stages.hpp"
 #include "terrains/terrain.hpp"
 
@@ -59,18 +59,18 @@ void checkView(const Scenario& sc, std::size_t k, const std::optional<double>& s
   const std::string where = (sc.file.empty() ? std::string("<string>") : sc.file.string()) + ": views[" +
                             std::to_string(k) + "].xyz_m: ";
   std::string got = "[";  // (appended, not "[" + ...: GCC 12 warns a false -Wrestrict on that)
-  got += scenario_detail::shortest(p.x()) + ", " + scenario_detail::shortest(p.y()) + ", " +
-         scenario_detail::shortest(p.z()) + "]";
+  got += base::plainText(p.x()) + ", " + base::plainText(p.y()) + ", " +
+         base::plainText(p.z()) + "]";
   if (!surface)
     throw ScenarioError(where + "expected a sensor over the terrain, got " + got + ", where there is no ground");
   if (!free_below || !(p.z() > *surface))
     throw ScenarioError(where + "expected the sensor above the terrain, whose surface is at z = " + metres(*surface) +
-                        " there, got z = " + scenario_detail::shortest(p.z()));
+                        " there, got z = " + base::plainText(p.z()));
 }
 
 void run(RunState& s) {
   const Scenario& sc = s.scenario;
-  Stopwatch t;
+  base::Stopwatch t;
   // Everything that can refuse the scenario comes before the first file: the run directory is
   // made here, once the views are known to stand over the terrain.
   if (sc.terrain.kind == terrains::TerrainKind::Mjcf) {
@@ -112,7 +112,7 @@ void run(RunState& s) {
                               {"vertical_offset_m", dem->vertical_offset_m}};
       const double off = dem->vertical_offset_m;
       s.say("world     DEM " + sc.terrain.dem + " (" + dem->crs_name + "): world origin at E " +
-            scenario_detail::shortest(dem->frame.origin_x_m) + ", N " + scenario_detail::shortest(dem->frame.origin_y_m) +
+            base::plainText(dem->frame.origin_x_m) + ", N " + base::plainText(dem->frame.origin_y_m) +
             ", z = DEM height " + (off < 0 ? "+ " : "- ") + metres(std::abs(off)) + " m");
     }
   }

@@ -21,27 +21,27 @@
 #include <nlohmann/json.hpp>
 
 #include "base/random.hpp"
+#include "base/read_file.hpp"
+#include "base/text.hpp"
+#include "base/digest.hpp"
 #include "eval/scenario/io.hpp"
-#include "eval/tools/journal.hpp"
 #include "eval/pictures/match_figures.hpp"
 #include "eval/run/pair_registration.hpp"
-#include "eval/tools/progress.hpp"
 #include "eval/run/stages.hpp"
 #include "eval/score/stats.hpp"
-#include "eval/tools/sweep/sweep_internal.hpp"
+#include "eval/tools/jobs.hpp"
+#include "eval/tools/sweep/sweep.hpp"
 
 namespace ambler::eval {
 namespace {
 
 namespace fs = std::filesystem;
-using sweep_detail::csvLine;
 
 constexpr std::uint64_t kBasinStream = 7001;  // the trials' directions: independent of terrain and noise
 const std::vector<std::string> kHeader{"method", "translation_m", "rotation_deg", "trial", "translation_error_m",
                                        "rotation_error_deg", "success", "iterations", "time_s",
                                        "accepted", "false_accept"};
 
-using sweep_detail::numberText;
 
 std::size_t drawCount(const BasinGrid& g) {
   return g.translation_m.size() * g.rotation_deg.size() * std::size_t(g.trials);
@@ -99,12 +99,12 @@ std::string journalIdentity(const Scenario& sc, const BasinOptions& opt) {
   std::string text = "basin\ntiming=" + std::string(opt.timing ? "1" : "0") + "\nshard=" +
                      (opt.shard ? std::to_string(opt.shard->index) + "/" + std::to_string(opt.shard->count) : "") +
                      "\ntranslation_m=";
-  for (const double t : opt.grid.translation_m) text += numberText(t) + ",";
+  for (const double t : opt.grid.translation_m) text += csvNumber(t) + ",";
   text += "\nrotation_deg=";
-  for (const double r : opt.grid.rotation_deg) text += numberText(r) + ",";
+  for (const double r : opt.grid.rotation_deg) text += csvNumber(r) + ",";
   text += "\ntrials=" + std::to_string(opt.grid.trials) + "\nvertical=" + (opt.grid.vertical_axis ? "1" : "0") +
           "\n" + resolvedYaml(sc);
-  return identityDigest(text);
+  return base::digest(text);
 }
 
 // The scenario as the basin builds its pair: no Cartesian baseline, no composite.
@@ -148,14 +148,14 @@ std::string summary(const Scenario& sc, const BasinOptions& opt, const Tally& t,
         std::to_string(g.translation_m.size()) + " initial translations x " + std::to_string(g.rotation_deg.size()) +
         " rotations (" + (g.vertical_axis ? "about the vertical" : "about a random axis") + ") x " +
         std::to_string(g.trials) + " trials per cell, every method on the same draws. A trial succeeds within " +
-        numberText(100 * spec.success_translation_m) + " cm and " + numberText(spec.success_rotation_deg) +
+        csvNumber(100 * spec.success_translation_m) + " cm and " + csvNumber(spec.success_rotation_deg) +
         "°.\n\n";
   md += "The 95 % boundary: for each initial rotation, the largest initial translation up to which every "
         "cell succeeds in at least 95 % of its trials (— where even the first cell does not).\n\n";
   md += "Accepted: the rover's verdict (docs/matching.md, \"Acceptance\"), gated by the declared prior; a false "
         "accept is accepted and not a success, a false reject a success not accepted.\n\n";
   md += "| method | successes | accepted | false accepts | false rejects | median translation error of the successes |";
-  for (const double r : g.rotation_deg) md += " " + numberText(r) + "° |";
+  for (const double r : g.rotation_deg) md += " " + csvNumber(r) + "° |";
   md += "\n|---|---:|---:|---:|---:|---:|";
   for (std::size_t k = 0; k < g.rotation_deg.size(); ++k) md += "---:|";
   md += "\n";
@@ -177,7 +177,7 @@ std::string summary(const Scenario& sc, const BasinOptions& opt, const Tally& t,
     for (const double b : boundary(g, methods[m].rate, 0.95)) {
       if (std::isfinite(b)) {
         md += ' ';
-        md += numberText(b);
+        md += csvNumber(b);
         md += " m |";
       } else {
         md += " — |";
@@ -202,8 +202,8 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
   t.err.assign(spec.methods.size(), std::vector<std::vector<double>>(cells));
   t.ok_err.assign(spec.methods.size(), {});
   std::map<std::string, std::size_t> t_index, r_index;
-  for (std::size_t i = 0; i < g.translation_m.size(); ++i) t_index[numberText(g.translation_m[i])] = i;
-  for (std::size_t i = 0; i < g.rotation_deg.size(); ++i) r_index[numberText(g.rotation_deg[i])] = i;
+  for (std::size_t i = 0; i < g.translation_m.size(); ++i) t_index[csvNumber(g.translation_m[i])] = i;
+  for (std::size_t i = 0; i < g.rotation_deg.size(); ++i) r_index[csvNumber(g.rotation_deg[i])] = i;
   for (std::size_t k = 1; k < records.size(); ++k) {
     const auto& row = records[k];
     const std::size_t m = method_index.at(row[0]);
@@ -218,8 +218,8 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
       if (row[6] == "true") t.ok_err[m].push_back(e);
     }
   }
-  const std::string criterion = "success: within " + numberText(100 * spec.success_translation_m) + " cm and " +
-                                numberText(spec.success_rotation_deg) + " deg; " + std::to_string(g.trials) +
+  const std::string criterion = "success: within " + csvNumber(100 * spec.success_translation_m) + " cm and " +
+                                csvNumber(spec.success_rotation_deg) + " deg; " + std::to_string(g.trials) +
                                 " trials per cell";
   std::vector<BasinBoundary> boundaries;
   for (std::size_t m = 0; m < spec.methods.size(); ++m) {
@@ -229,8 +229,8 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
     h.subtitle = criterion + "\nin a cell: successes/trials; median error; acc: accepted; FA: false accepts";
     h.row_axis = "initial translation";
     h.col_axis = g.vertical_axis ? "initial rotation (yaw)" : "initial rotation (about a random axis)";
-    for (const double v : g.translation_m) h.row_labels.push_back(numberText(v) + " m");
-    for (const double v : g.rotation_deg) h.col_labels.push_back(numberText(v) + " deg");
+    for (const double v : g.translation_m) h.row_labels.push_back(csvNumber(v) + " m");
+    for (const double v : g.rotation_deg) h.col_labels.push_back(csvNumber(v) + " deg");
     BasinBoundary b{name, {}};
     for (std::size_t c = 0; c < cells; ++c) {
       h.successes.push_back(t.ok[m][c]);
@@ -261,7 +261,7 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
 
 std::vector<double> parseBasinAxis(const std::string& text, const std::string& option, double max) {
   std::vector<double> out;
-  const auto parts = sweep_detail::split(text, ',');
+  const auto parts = base::split(text, ',');
   for (const std::string& raw : parts) {
     const auto b = raw.find_first_not_of(" \t"), e = raw.find_last_not_of(" \t");
     const std::string p = b == std::string::npos ? "" : raw.substr(b, e - b + 1);
@@ -270,9 +270,9 @@ std::vector<double> parseBasinAxis(const std::string& text, const std::string& o
     if (p.empty() || ec != std::errc() || end != p.data() + p.size() || !std::isfinite(v))
       throw BasinError(option + ": expected comma-separated numbers, got " + yamlQuoted(text));
     if (v < 0) throw BasinError(option + ": " + p + " is negative; the axis is a magnitude (>= 0)");
-    if (v > max) throw BasinError(option + ": " + p + " is beyond " + numberText(max));
+    if (v > max) throw BasinError(option + ": " + p + " is beyond " + csvNumber(max));
     if (!out.empty() && v <= out.back())
-      throw BasinError(option + ": values must increase, got " + p + " after " + numberText(out.back()));
+      throw BasinError(option + ": values must increase, got " + p + " after " + csvNumber(out.back()));
     out.push_back(v);
   }
   if (out.empty()) throw BasinError(option + ": expected at least one value");
@@ -297,6 +297,30 @@ Eigen::Isometry3d basinError(std::uint64_t seed, int trial, double translation_m
   return E;
 }
 
+namespace {
+
+// The scenario's registration with the basin's prior: it covers every error the grid tries, and
+// the verdict gates by it (taken as three σ), whatever the scenario's odometry model says of the
+// views' distance.
+// basin.csv's records: the header, then the rows by method (the scenario's order), then by draw.
+std::vector<std::vector<std::string>> byMethod(const std::vector<Rows>& rows, std::size_t methods) {
+  std::vector<std::vector<std::string>> records{kHeader};
+  for (std::size_t m = 0; m < methods; ++m)
+    for (const Rows& r : rows) records.push_back(r[m]);
+  return records;
+}
+
+perception::RegistrationConfig basinConfig(const Scenario& sc, const BasinGrid& g) {
+  perception::RegistrationConfig config = registrationConfig(sc);
+  config.prior_translation_m = std::max(config.prior_translation_m, g.translation_m.back());
+  config.prior_rotation_deg = std::max(config.prior_rotation_deg, g.rotation_deg.back());
+  config.odometry.reset();
+  config.acceptance.prior = {config.prior_translation_m / 3, config.prior_rotation_deg / 3};
+  return config;
+}
+
+}  // namespace
+
 fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   validate(scenario, opt);
   const BasinGrid& g = opt.grid;
@@ -306,12 +330,10 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   const Scenario sc = pairScenario(scenario);
   const MatchingSpec& spec = *sc.matching;
   const auto [pi, pj] = spec.pairs.front();
-  std::vector<std::size_t> todo;
-  for (std::size_t u = 0; u < drawCount(g); ++u)
-    if (!opt.shard || u % std::size_t(opt.shard->count) == std::size_t(opt.shard->index - 1)) todo.push_back(u);
+  const std::vector<std::size_t> todo = shardItems(drawCount(g), opt.shard);
   // With --resume, what an earlier attempt recorded, checked before anything runs or is written.
   const fs::path journal_file =
-      opt.out / (opt.shard ? sweep_detail::shardName(*opt.shard, "basin", ".journal") : "basin.journal");
+      opt.out / (opt.shard ? shardName(*opt.shard, "basin", ".journal") : "basin.journal");
   const std::string identity = journalIdentity(scenario, opt);
   const bool resuming = opt.resume && fs::exists(journal_file);
   const JournalContents done = opt.resume ? readJournal(journal_file, identity, drawCount(g)) : JournalContents{};
@@ -334,14 +356,7 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   RunState s{sc, opt.out / "pair", opt.progress};
   for (const Stage& stage : {stages::world(), stages::scan(), stages::map()}) stage.run(s);
   writeText(opt.out / "pair" / "scenario.resolved.yaml", resolvedYaml(sc));  // as a run's; `ambler report` shows it
-  perception::RegistrationConfig config = registrationConfig(sc);
-  // The rover's prior covers every error the grid tries.
-  config.prior_translation_m = std::max(config.prior_translation_m, g.translation_m.back());
-  config.prior_rotation_deg = std::max(config.prior_rotation_deg, g.rotation_deg.back());
-  // A basin keeps its declared prior: the verdict gates by it, taken as three σ, whatever the
-  // scenario's odometry model says of the views' distance.
-  config.odometry.reset();
-  config.acceptance.prior = {config.prior_translation_m / 3, config.prior_rotation_deg / 3};
+  const perception::RegistrationConfig config = basinConfig(sc, g);
   const ViewState& vi = s.views[std::size_t(pi)];
   const ViewState& vj = s.views[std::size_t(pj)];
   const PairRegistration pair(*vi.locus, vi.T_WS, *vj.locus, vj.T_WS, config, spec.methods);
@@ -353,74 +368,49 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
         " draws recorded in " + journal_file.string() +
         (done.torn_tail ? " (a draw cut short while being recorded is registered again)" : ""));
 
-  std::mutex mutex;  // guards the progress, the journal and the failures
   Progress progress("basin " + sc.name, todo.size(), todo.size() - pending.size(), Progress::modeFor(opt.progress),
                     std::chrono::seconds(1));
   progress.setLinePrefix("basin ");
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> stop{false};
-  std::string first_failure;               // a registration that threw, reported once
-  std::optional<std::string> fatal;        // the journal could not be written
-  const auto work = [&] {
-    for (std::size_t p; !stop && (p = next++) < pending.size();) {
-      const std::size_t i = pending[p];
-      const Draw d = draw(g, todo[i]);
-      const double t_m = g.translation_m[d.t], r_deg = g.rotation_deg[d.r];
-      const Eigen::Isometry3d T_0 = pair.trueRelative() * basinError(sc.seed, d.trial, t_m, r_deg, vj.T_WS, g.vertical_axis);
-      std::string verdicts;
-      for (const MatchMethod m : spec.methods) {
-        std::vector<std::string> row{matchMethodName(m), numberText(t_m), numberText(r_deg), std::to_string(d.trial)};
-        try {
-          const PairResult res = pair.run(m, T_0);
-          const bool ok = res.error.translation_m <= spec.success_translation_m &&
-                          res.error.rotation_deg <= spec.success_rotation_deg;
-          row.insert(row.end(), {numberText(res.error.translation_m), numberText(res.error.rotation_deg),
-                                 ok ? "true" : "false", std::to_string(res.reg.iterations),
-                                 opt.timing ? numberText(res.seconds) : "",
-                                 res.reg.assessment.accepted ? "true" : "false",
-                                 res.reg.assessment.accepted && !ok ? "true" : "false"});
-          verdicts += std::string(" ") + matchMethodName(m) + (ok ? " ok" : " FAILED");
-        } catch (const std::invalid_argument& e) {
-          // A method that gives up (no overlap left, too few points) has not converged.
-          row.insert(row.end(), {"", "", "false", "0", "", "false", "false"});
-          verdicts += std::string(" ") + matchMethodName(m) + " GAVE UP";
-          const std::lock_guard lock(mutex);
-          if (first_failure.empty()) first_failure = matchMethodName(m) + std::string(": ") + e.what();
-        }
-        rows[i].push_back(std::move(row));
-      }
-      const std::lock_guard lock(mutex);
+  std::mutex mutex;            // guards first_failure
+  std::string first_failure;  // a registration that threw, reported once
+  const std::optional<JobFailure> failure = runJobs(todo, pending, opt.jobs, journal, progress, [&](std::size_t i) {
+    const Draw d = draw(g, todo[i]);
+    const double t_m = g.translation_m[d.t], r_deg = g.rotation_deg[d.r];
+    const Eigen::Isometry3d T_0 = pair.trueRelative() * basinError(sc.seed, d.trial, t_m, r_deg, vj.T_WS, g.vertical_axis);
+    std::string verdicts;
+    for (const MatchMethod m : spec.methods) {
+      std::vector<std::string> row{matchMethodName(m), csvNumber(t_m), csvNumber(r_deg), std::to_string(d.trial)};
       try {
-        journal.append(todo[i], rowsPayload(rows[i]));
-      } catch (const JournalError& e) {
-        stop = true;
-        if (!fatal) fatal = e.what();
-        return;
+        const PairResult res = pair.run(m, T_0);
+        const bool ok = res.error.translation_m <= spec.success_translation_m &&
+                        res.error.rotation_deg <= spec.success_rotation_deg;
+        row.insert(row.end(), {csvNumber(res.error.translation_m), csvNumber(res.error.rotation_deg),
+                               ok ? "true" : "false", std::to_string(res.reg.iterations),
+                               opt.timing ? csvNumber(res.seconds) : "",
+                               res.reg.assessment.accepted ? "true" : "false",
+                               res.reg.assessment.accepted && !ok ? "true" : "false"});
+        verdicts += std::string(" ") + matchMethodName(m) + (ok ? " ok" : " FAILED");
+      } catch (const std::invalid_argument& e) {
+        // A method that gives up (no overlap left, too few points) has not converged.
+        row.insert(row.end(), {"", "", "false", "0", "", "false", "false"});
+        verdicts += std::string(" ") + matchMethodName(m) + " GAVE UP";
+        const std::lock_guard lock(mutex);
+        if (first_failure.empty()) first_failure = matchMethodName(m) + std::string(": ") + e.what();
       }
-      progress.step(numberText(t_m) + " m " + numberText(r_deg) + " deg trial " + std::to_string(d.trial) + ":" +
-                    verdicts);
+      rows[i].push_back(std::move(row));
     }
-  };
-  const std::size_t jobs = std::min<std::size_t>(std::size_t(opt.jobs), std::max<std::size_t>(1, pending.size()));
-  if (jobs <= 1) {
-    work();
-  } else {
-    std::vector<std::jthread> threads;
-    for (std::size_t k = 0; k < jobs; ++k) threads.emplace_back(work);
-  }
+    return JobRecord{rowsPayload(rows[i]),
+                     csvNumber(t_m) + " m " + csvNumber(r_deg) + " deg trial " + std::to_string(d.trial) + ":" + verdicts};
+  });
   progress.finish();
-  if (fatal) throw JournalError(*fatal);
+  if (failure)
+    throw BasinError(opt.out.string() + ": draw " + std::to_string(failure->item) + ": " + failure->message);
   if (!first_failure.empty()) say("basin: a method gave up (counted as a failure), e.g. " + first_failure);
 
-  // Rows by method (the scenario's order), then draw.
-  std::string text = csvLine(kHeader);
-  std::vector<std::vector<std::string>> records{kHeader};
-  for (std::size_t m = 0; m < spec.methods.size(); ++m)
-    for (const Rows& r : rows) {
-      text += csvLine(r[m]);
-      records.push_back(r[m]);
-    }
-  const fs::path csv = opt.out / (opt.shard ? sweep_detail::shardName(*opt.shard, "basin") : "basin.csv");
+  const std::vector<std::vector<std::string>> records = byMethod(rows, spec.methods.size());
+  std::string text;
+  for (const auto& record : records) text += csvLine(record);
+  const fs::path csv = opt.out / (opt.shard ? shardName(*opt.shard, "basin") : "basin.csv");
   writeText(csv, text);
   if (!opt.shard) writeFigures(sc, opt, records);
   say("wrote " + csv.string() + " (" + std::to_string(records.size() - 1) + " rows)" +
@@ -432,15 +422,21 @@ fs::path mergeBasin(const Scenario& scenario, const BasinOptions& opt) {
   validate(scenario, opt);
   const BasinGrid& g = opt.grid;
   const MatchingSpec& spec = *scenario.matching;
-  const auto files = sweep_detail::shardFiles(opt.out, "basin");
+  const auto files = shardFiles(opt.out, "basin");
   const std::size_t draws = drawCount(g), methods = spec.methods.size();
   std::map<std::string, std::size_t> method_index, t_index, r_index;
   for (std::size_t m = 0; m < methods; ++m) method_index[matchMethodName(spec.methods[m])] = m;
-  for (std::size_t i = 0; i < g.translation_m.size(); ++i) t_index[numberText(g.translation_m[i])] = i;
-  for (std::size_t i = 0; i < g.rotation_deg.size(); ++i) r_index[numberText(g.rotation_deg[i])] = i;
+  for (std::size_t i = 0; i < g.translation_m.size(); ++i) t_index[csvNumber(g.translation_m[i])] = i;
+  for (std::size_t i = 0; i < g.rotation_deg.size(); ++i) r_index[csvNumber(g.rotation_deg[i])] = i;
   std::vector<std::optional<std::vector<std::string>>> rows(methods * draws);
   for (const auto& [shard, path] : files) {
-    const auto records = parseResultsCsv(sweep_detail::readText(path, path.string()));
+    std::string text;
+    try {
+      text = base::readFile(path);
+    } catch (const base::ReadError& e) {
+      throw BasinError(path.string() + ": " + e.what());
+    }
+    const auto records = parseResultsCsv(text);
     if (!records || records->empty() || records->front() != kHeader)
       throw BasinError(path.string() + ": not a basin CSV (expected the header " + csvLine(kHeader).substr(0, 40) + "...)");
     for (std::size_t k = 1; k < records->size(); ++k) {
@@ -471,7 +467,7 @@ fs::path mergeBasin(const Scenario& scenario, const BasinOptions& opt) {
     if (!rows[k]) {
       const Draw d = draw(g, k % draws);
       throw BasinError(opt.out.string() + ": no row of " + matchMethodName(spec.methods[k / draws]) + " at " +
-                       numberText(g.translation_m[d.t]) + " m, " + numberText(g.rotation_deg[d.r]) + " deg, trial " +
+                       csvNumber(g.translation_m[d.t]) + " m, " + csvNumber(g.rotation_deg[d.r]) + " deg, trial " +
                        std::to_string(d.trial) + " in the shards");
     }
     text += csvLine(*rows[k]);

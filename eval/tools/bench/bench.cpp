@@ -1,3 +1,4 @@
+#include "base/random.hpp"
 #include "eval/tools/bench/bench.hpp"
 
 #include <tbb/blocked_range2d.h>
@@ -163,6 +164,63 @@ nlohmann::ordered_json benchScan(const BenchOptions& opt) {
   return j;
 }
 
+namespace {
+
+// One cell size of `ambler bench map`: the locus mapper on one thread and on all, the scalar
+// search and the lanes capped at AVX2 (where the CPU has AVX-512) on one thread, the Cartesian
+// baseline on one thread. Seconds per map.
+struct MapTimes {
+  double t1 = 0, ta = 0, sp = 0;  // one thread, all threads, the median of their paired ratios
+  double ts = 0, t2 = 0, tc = 0;  // scalar, AVX2 (0: not measured), Cartesian
+  long lane_cells = 0;            // cells the lanes completed
+};
+
+MapTimes timeMaps(const perception::RangeImage& image, const perception::Raster<std::uint8_t>& edges,
+                  const perception::LocusConfig& locus, const perception::MapGrid& grid, perception::LaneIsa isa,
+                  int repetitions) {
+  const perception::LocusMapper mapper(image, &edges, locus);
+  perception::LocusConfig scalar_config = locus;
+  scalar_config.vectorized = false;
+  const perception::LocusMapper scalar(image, &edges, scalar_config);
+  const double cells = double(grid.cells());
+  MapTimes m;
+  mapper.map(grid, &m.lane_cells);
+  // One thread against all, paired: each repetition times a burst of maps (~5 ms, so that a
+  // worker thread's wake-up is not the measurement) on one thread, then on all; the speedup is
+  // the median of the repetitions' ratios, which a slow spell of the shared machine shifts less
+  // than it shifts either median alone.
+  const int burst = std::max(1, int(5e-3 / (cells * 100e-9)));
+  const auto timeBurst = [&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    for (int b = 0; b < burst; ++b) mapper.map(grid);
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / burst;
+  };
+  std::vector<double> one_s, all_s, ratio;
+  timeBurst();
+  for (int i = 0; i < repetitions; ++i) {
+    double a = 0, b = 0;
+    {
+      tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+      a = timeBurst();
+    }
+    b = timeBurst();
+    one_s.push_back(a), all_s.push_back(b), ratio.push_back(a / b);
+  }
+  m.t1 = median(one_s), m.ta = median(all_s), m.sp = median(ratio);
+  {
+    tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+    m.ts = timeMedian(repetitions, [&] { scalar.map(grid); });
+    if (isa == perception::LaneIsa::Avx512) {  // what a CPU with AVX2 but no AVX-512 would run
+      const perception::LaneIsaCap avx2(perception::LaneIsa::Avx2);
+      m.t2 = timeMedian(repetitions, [&] { mapper.map(grid); });
+    }
+    m.tc = timeMedian(repetitions, [&] { perception::cartesianMap(image, grid, {}); });
+  }
+  return m;
+}
+
+}  // namespace
+
 nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   std::fprintf(stderr, "bench map: building the benchmark world (mars terrain, seed 1) and one ERIM scan...\n");
   const auto bw = makeBenchWorld();
@@ -193,45 +251,9 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
     MapSpec spec = region;
     spec.cell_m = cell;
     const perception::MapGrid grid = spec.grid();
-    const perception::LocusMapper mapper(image, &edges, locus);
-    perception::LocusConfig scalar_config = locus;
-    scalar_config.vectorized = false;
-    const perception::LocusMapper scalar(image, &edges, scalar_config);
-    const double cells = double(grid.cells());
-    double tc = 0, ts = 0, t2 = 0;
-    long lane_cells = 0;
-    mapper.map(grid, &lane_cells);
-    // One thread against all, paired: each repetition times a burst of maps (~5 ms, so that a
-    // worker thread's wake-up is not the measurement) on one thread, then on all; the speedup is
-    // the median of the repetitions' ratios, which a slow spell of the shared machine shifts less
-    // than it shifts either median alone.
-    const int burst = std::max(1, int(5e-3 / (cells * 100e-9)));
-    const auto timeBurst = [&] {
-      const auto t0 = std::chrono::steady_clock::now();
-      for (int b = 0; b < burst; ++b) mapper.map(grid);
-      return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / burst;
-    };
-    std::vector<double> one_s, all_s, ratio;
-    timeBurst();
-    for (int i = 0; i < opt.repetitions; ++i) {
-      double a = 0, b = 0;
-      {
-        tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-        a = timeBurst();
-      }
-      b = timeBurst();
-      one_s.push_back(a), all_s.push_back(b), ratio.push_back(a / b);
-    }
-    const double t1 = median(one_s), ta = median(all_s), sp = median(ratio);
-    {
-      tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-      ts = timeMedian(opt.repetitions, [&] { scalar.map(grid); });
-      if (isa == perception::LaneIsa::Avx512) {  // what a CPU with AVX2 but no AVX-512 would run
-        const perception::LaneIsaCap avx2(perception::LaneIsa::Avx2);
-        t2 = timeMedian(opt.repetitions, [&] { mapper.map(grid); });
-      }
-      tc = timeMedian(opt.repetitions, [&] { perception::cartesianMap(image, grid, {}); });
-    }
+    const MapTimes m = timeMaps(image, edges, locus, grid, isa, opt.repetitions);
+    const double cells = double(grid.cells()), t1 = m.t1, ta = m.ta, sp = m.sp, ts = m.ts, t2 = m.t2, tc = m.tc;
+    const long lane_cells = m.lane_cells;
     char key[16];
     std::snprintf(key, sizeof key, "%.2f", cell);
     one[key] = t1 / cells * 1e9;
@@ -299,8 +321,8 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
   const Eigen::Isometry3d T_j = perception::sensorPose(sc.views[j].xyz_m, sc.views[j].rpy_rad);
   const perception::MapGrid grid = sc.map->grid();
   const perception::ScanToMapConfig config = sc.map->scanToMapConfig();
-  const perception::ScanMap map_i = perception::scanToMap(scanner.scan(T_i, viewSeed(sc.seed, i)).image, sc.sensor, T_i, grid, config);
-  const perception::ScanMap map_j = perception::scanToMap(scanner.scan(T_j, viewSeed(sc.seed, j)).image, sc.sensor, T_j, grid, config);
+  const perception::ScanMap map_i = perception::scanToMap(scanner.scan(T_i, base::viewSeed(sc.seed, i)).image, sc.sensor, T_i, grid, config);
+  const perception::ScanMap map_j = perception::scanToMap(scanner.scan(T_j, base::viewSeed(sc.seed, j)).image, sc.sensor, T_j, grid, config);
   const PairRegistration pair(map_i, T_i, map_j, T_j, registrationConfig(sc), sc.matching->methods);
   // From the rover's belief, as the match stage starts.
   const Eigen::Isometry3d T_0 = sc.matching->initialEstimate(pair.trueRelative(), sc.seed, i, j);

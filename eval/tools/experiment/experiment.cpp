@@ -2,6 +2,7 @@
 // step that reads only their results.csv (so a sweep run in shards and merged reports the same),
 // groups the runs that differ only in their seed, and writes mean ± standard deviation over seeds.
 // Also the helpers every experiment shares (experiment_internal.hpp).
+#include "base/read_file.hpp"
 #include "eval/tools/experiment/experiment.hpp"
 
 #include <yaml-cpp/yaml.h>
@@ -36,11 +37,11 @@ namespace experiment_detail {
 namespace fs = std::filesystem;
 
 std::string readFile(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw SweepError(file.string() + ": cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
+  try {
+    return base::readFile(file);
+  } catch (const base::ReadError& e) {
+    throw SweepError(file.string() + ": " + e.what());
+  }
 }
 
 Sweep experimentSweep(const fs::path& file, bool quick) {

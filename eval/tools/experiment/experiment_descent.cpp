@@ -20,7 +20,7 @@
 #include "eval/run/run_state.hpp"
 #include "eval/run/stages.hpp"
 #include "eval/score/stats.hpp"
-#include "eval/tools/sweep/sweep_internal.hpp"
+#include "eval/tools/shards.hpp"
 #include "perception/iconic.hpp"
 #include "perception/locus_mapper.hpp"
 #include "perception/rigid_transform.hpp"
@@ -30,8 +30,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace experiment_detail;
-using sweep_detail::csvLine;
-using sweep_detail::numberText;
 
 const std::vector<std::string> kTerrains{"mars", "fractal", "dem"};
 
@@ -135,7 +133,7 @@ std::vector<std::vector<std::string>> registerPair(const Scenario& scenario, con
     options.descent_robust_loss = v.robust;
     options.descent_centroid_gain = v.gain;
     options.descent_backtracking = v.backtracking;
-    const Stopwatch watch;
+    const base::Stopwatch watch;
     const perception::IconicResult r =
         perception::iconicGradientDescent(map_i, mapper, perception::PoseVector::Zero(), options);
     const double seconds = watch.seconds();
@@ -143,10 +141,10 @@ std::vector<std::vector<std::string>> registerPair(const Scenario& scenario, con
     const perception::PoseError err = perception::poseError(T_IJ, T_est);
     const bool ok = err.translation_m <= spec.success_translation_m && err.rotation_deg <= spec.success_rotation_deg;
     rows.push_back({terrain, std::to_string(sc.seed), v.name, flag(v.normals), flag(v.robust), flag(v.gain),
-                    flag(v.backtracking), numberText(start.translation_m), numberText(start.rotation_deg),
-                    numberText(err.translation_m), numberText(err.rotation_deg), flag(ok),
+                    flag(v.backtracking), csvNumber(start.translation_m), csvNumber(start.rotation_deg),
+                    csvNumber(err.translation_m), csvNumber(err.rotation_deg), flag(ok),
                     std::to_string(r.iterations), flag(r.converged), std::to_string(r.overlap),
-                    timing ? numberText(seconds) : ""});
+                    timing ? csvNumber(seconds) : ""});
     detail.append(" ").append(departures(v)).append(ok ? ":ok" : ":FAILED");
   }
   return rows;

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "eval/tools/report/report.hpp"
+#include "base/read_file.hpp"
 #include "eval/tools/report/report_internal.hpp"
 
 namespace ambler::eval::report_detail {
@@ -79,11 +80,11 @@ std::string verdict(bool pass) { return pass ? "<td class=\"pass\">pass</td>" : 
 }  // namespace
 
 std::string readFile(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open file");
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
+  try {
+    return base::readFile(path);
+  } catch (const base::ReadError& e) {
+    throw std::runtime_error(path.string() + ": " + e.what());
+  }
 }
 
 // Numbers in text order: "view_2" before "view_10".

@@ -104,30 +104,26 @@ struct Plot {
 
 }  // namespace
 
-std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
-  const fs::path csv = dir / "results.csv";
-  const Rows rows = readCsv(csv, "a sweep's results table", {"run"});
+namespace {
+
+// A results.csv column of numbers (true/false count as 1/0): its value per run, NaN where empty.
+struct Metric {
+  std::size_t column;
+  std::vector<double> v;
+  bool varies = false;
+};
+// An axis with more than one value, its values in sweep order (first appearance in run order).
+struct Axis {
+  std::size_t column;
+  std::vector<std::string> values;
+  bool numeric = true;
+  std::vector<std::size_t> of_run;  // the index of each run's value
+};
+
+// The metric columns (after the axes): a column is numeric when every non-empty cell is a number;
+// one never written is left out; constant ones are tabled but not plotted.
+std::vector<Metric> sweepMetrics(const Rows& rows, std::size_t n_axes) {
   const std::vector<std::string>& header = rows.front();
-  std::error_code ec;
-  std::string spec_text;
-  if (fs::is_regular_file(dir / "sweep.resolved.yaml", ec)) spec_text = readFile(dir / "sweep.resolved.yaml");
-  const std::size_t n_axes = axisCount(header, spec_text);
-  const std::size_t n_runs = rows.size() - 1;
-
-  std::string name = shownName(dir);
-  try {
-    if (!spec_text.empty()) name = YAML::Load(spec_text)["name"].as<std::string>();
-  } catch (const YAML::Exception&) {
-  }
-  const std::string title = "ambler sweep report: " + name;
-
-  // Columns: the axes (1 … n_axes), then metrics. A metric is numeric when every non-empty cell
-  // is a number (true/false count as 1/0); constant metrics are tabled but not plotted.
-  struct Metric {
-    std::size_t column;
-    std::vector<double> v;  // per run; NaN where empty
-    bool varies = false;
-  };
   std::vector<Metric> metrics;
   for (std::size_t c = 1 + n_axes; c < header.size(); ++c) {
     Metric m{c, {}, false};
@@ -145,13 +141,13 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
     m.varies = hi > lo;
     metrics.push_back(std::move(m));
   }
-  // Axes with more than one value, their values in sweep order (first appearance in run order).
-  struct Axis {
-    std::size_t column;
-    std::vector<std::string> values;
-    bool numeric = true;
-    std::vector<std::size_t> of_run;  // the index of each run's value
-  };
+  return metrics;
+}
+
+// The axis columns with more than one value; a seed axis replicates the others (its runs are the
+// spread at each value of the other axes), so it is left out unless it is the only one that varies.
+std::vector<Axis> sweepAxes(const Rows& rows, std::size_t n_axes) {
+  const std::vector<std::string>& header = rows.front();
   std::vector<Axis> axes;
   for (std::size_t c = 1; c <= n_axes; ++c) {
     Axis a{c, {}, true, {}};
@@ -169,9 +165,13 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
   if (axes.size() > 1)
     axes.erase(std::remove_if(axes.begin(), axes.end(), [&](const Axis& a) { return header[a.column] == "seed"; }),
                axes.end());
+  return axes;
+}
 
-  // The plots: each varying metric against each axis with more than one value: at each value of
-  // the axis, the median, the least and the greatest over the runs with that value.
+// Each varying metric against each axis: at each value of the axis, the median, the least and the
+// greatest over the runs with that value.
+std::vector<Plot> sweepPlots(const std::vector<std::string>& header, const std::vector<Metric>& metrics,
+                             const std::vector<Axis>& axes, std::size_t n_runs) {
   std::vector<Plot> plots;
   for (const Metric& m : metrics) {
     if (!m.varies) continue;
@@ -214,20 +214,11 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
       plots.push_back(std::move(p));
     }
   }
-  // gnuplot runs in parallel (renderPlot is thread-safe); each plot's bytes depend on its spec alone.
-  tbb::parallel_for(std::size_t(0), plots.size(), [&](std::size_t i) { plots[i].png = compactPngBytes(renderPlot(plots[i].spec, 640, 400)); });
+  return plots;
+}
 
-  std::string html = pageHead(title) + "<p>Sweep directory <code>" + htmlEscape(shownName(dir)) + "</code>: " +
-                     std::to_string(n_runs) + (n_runs == 1 ? " run" : " runs") + ", " + std::to_string(n_axes) +
-                     (n_axes == 1 ? " axis" : " axes") + ", " + std::to_string(header.size() - 1 - n_axes) +
-                     " metric columns in <code>results.csv</code> (numbers to 4 significant digits).</p>\n<nav>";
-  // The worst runs: by the locus map's RMS error of view 0, else the first RMS error column.
-  std::optional<std::size_t> worst_by;
-  for (const Metric& m : metrics)
-    if (header[m.column] == "map.0.rms_error_m") worst_by = m.column;
-  for (const Metric& m : metrics)
-    if (!worst_by && header[m.column].ends_with("rms_error_m")) worst_by = m.column;
-
+// The runs meeting the goals the docs state, per column that has one.
+Table goalsTable(const std::vector<std::string>& header, const std::vector<Metric>& metrics) {
   Table goals_table;
   goals_table.caption = "runs meeting the goals the docs state";
   goals_table.corner = "column";
@@ -251,6 +242,115 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
     goals_table.rows.push_back({col, {std::to_string(pass) + " of " + std::to_string(n), htmlEscape(goal), doc}});
   }
 
+  return goals_table;
+}
+
+// The ten runs with the largest `worst_by`, linked to their directories and reports where kept.
+std::string worstRunsHtml(const fs::path& dir, const fs::path& html_dir, const Rows& rows, std::size_t n_axes,
+                          std::size_t worst_by) {
+  const std::vector<std::string>& header = rows.front();
+  std::error_code ec;
+  std::string html;
+  std::vector<std::size_t> order;
+  for (std::size_t r = 1; r < rows.size(); ++r)
+    if (number(rows[r][worst_by])) order.push_back(r);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return *number(rows[a][worst_by]) > *number(rows[b][worst_by]); });
+  if (order.size() > 10) order.resize(10);
+  Table t;
+  t.caption = "the " + std::to_string(order.size()) + " runs with the largest " + header[worst_by];
+  t.corner = "run";
+  for (std::size_t c = 1; c <= n_axes; ++c) t.columns.push_back(header[c]);
+  t.columns.push_back(header[worst_by]);
+  t.columns.push_back("report");
+  for (const std::size_t r : order) {
+    const std::string& run = rows[r][0];
+    std::vector<std::string> cells;
+    for (std::size_t c = 1; c <= n_axes; ++c) cells.push_back(htmlEscape(rows[r][c]));
+    cells.push_back(g4(*number(rows[r][worst_by])));
+    const fs::path run_dir = dir / "runs" / run;
+    const auto link = [&](const fs::path& target) {
+      return fs::absolute(target).lexically_normal().lexically_relative(fs::absolute(html_dir).lexically_normal())
+          .generic_string();
+    };
+    cells.push_back(fs::is_regular_file(run_dir / "report.html", ec)
+                        ? "<a href=\"" + htmlEscape(link(run_dir / "report.html")) + "\">report.html</a>"
+                        : "\xE2\x80\x94");
+    const std::string shown = fs::is_directory(run_dir, ec)
+                                  ? "<a href=\"" + htmlEscape(link(run_dir)) + "/\">" + htmlEscape(run) + "</a>"
+                                  : htmlEscape(run);
+    t.rows.push_back({run, cells});
+    t.rows.back().first = shown;  // the row heading is HTML here (a link), escaped above
+  }
+  html += "<h2 id=\"worst\">Worst runs</h2>\n<p>By <code>" + htmlEscape(header[worst_by]) +
+          "</code> (largest first). A run links to its directory when the sweep kept it (<code>--keep "
+          "metrics</code> or <code>all</code>), and to its report when one was written there.</p>\n";
+  // tableHtml escapes row headings; the links are built here instead.
+  std::string h = "<table>\n<caption>" + htmlEscape(t.caption) + "</caption>\n<tr><th>run</th>";
+  for (const auto& c : t.columns) h += "<th>" + htmlEscape(c) + "</th>";
+  h += "</tr>\n";
+  for (const auto& [head, cells] : t.rows) {
+    h += "<tr><th>" + head + "</th>";
+    for (const auto& c : cells) h += "<td>" + c + "</td>";
+    h += "</tr>\n";
+  }
+  html += h + "</table>\n";
+  return html;
+}
+
+// Least, median and greatest of each numeric metric over the runs.
+std::string metricsSummaryHtml(const std::vector<std::string>& header, const std::vector<Metric>& metrics) {
+  Table t;
+  t.caption = "each numeric metric over the runs";
+  t.columns = {"least", "median", "greatest", "runs with a value"};
+  for (const Metric& m : metrics) {
+    std::vector<double> v;
+    for (double x : m.v)
+      if (std::isfinite(x)) v.push_back(x);
+    t.rows.push_back({header[m.column],
+                      {g4(*std::min_element(v.begin(), v.end())), g4(median(v)),
+                       g4(*std::max_element(v.begin(), v.end())), std::to_string(v.size())}});
+  }
+  return "<h2 id=\"metrics\">Metrics</h2>\n" + tableHtml(t);
+}
+
+}  // namespace
+
+std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
+  const fs::path csv = dir / "results.csv";
+  const Rows rows = readCsv(csv, "a sweep's results table", {"run"});
+  const std::vector<std::string>& header = rows.front();
+  std::error_code ec;
+  std::string spec_text;
+  if (fs::is_regular_file(dir / "sweep.resolved.yaml", ec)) spec_text = readFile(dir / "sweep.resolved.yaml");
+  const std::size_t n_axes = axisCount(header, spec_text);
+  const std::size_t n_runs = rows.size() - 1;
+
+  std::string name = shownName(dir);
+  try {
+    if (!spec_text.empty()) name = YAML::Load(spec_text)["name"].as<std::string>();
+  } catch (const YAML::Exception&) {
+  }
+  const std::string title = "ambler sweep report: " + name;
+
+  const std::vector<Metric> metrics = sweepMetrics(rows, n_axes);
+  const std::vector<Axis> axes = sweepAxes(rows, n_axes);
+  std::vector<Plot> plots = sweepPlots(header, metrics, axes, n_runs);
+  // gnuplot runs in parallel (renderPlot is thread-safe); each plot's bytes depend on its spec alone.
+  tbb::parallel_for(std::size_t(0), plots.size(), [&](std::size_t i) { plots[i].png = compactPngBytes(renderPlot(plots[i].spec, 640, 400)); });
+
+  std::string html = pageHead(title) + "<p>Sweep directory <code>" + htmlEscape(shownName(dir)) + "</code>: " +
+                     std::to_string(n_runs) + (n_runs == 1 ? " run" : " runs") + ", " + std::to_string(n_axes) +
+                     (n_axes == 1 ? " axis" : " axes") + ", " + std::to_string(header.size() - 1 - n_axes) +
+                     " metric columns in <code>results.csv</code> (numbers to 4 significant digits).</p>\n<nav>";
+  // The worst runs: by the locus map's RMS error of view 0, else the first RMS error column.
+  std::optional<std::size_t> worst_by;
+  for (const Metric& m : metrics)
+    if (header[m.column] == "map.0.rms_error_m") worst_by = m.column;
+  for (const Metric& m : metrics)
+    if (!worst_by && header[m.column].ends_with("rms_error_m")) worst_by = m.column;
+
+  const Table goals_table = goalsTable(header, metrics);
   if (!spec_text.empty()) html += "<a href=\"#sweep\">Sweep</a>";
   if (!goals_table.rows.empty()) html += "<a href=\"#goals\">Goals</a>";
   if (!plots.empty()) html += "<a href=\"#plots\">Plots</a>";
@@ -268,66 +368,8 @@ std::string sweepReportHtml(const fs::path& dir, const fs::path& html_dir) {
             "dots is their median and the two other lines their least and greatest value.</p>\n";
     for (const Plot& p : plots) html += figureBytesHtml(p.png, p.caption);
   }
-  if (worst_by) {
-    std::vector<std::size_t> order;
-    for (std::size_t r = 1; r < rows.size(); ++r)
-      if (number(rows[r][*worst_by])) order.push_back(r);
-    std::stable_sort(order.begin(), order.end(),
-                     [&](std::size_t a, std::size_t b) { return *number(rows[a][*worst_by]) > *number(rows[b][*worst_by]); });
-    if (order.size() > 10) order.resize(10);
-    Table t;
-    t.caption = "the " + std::to_string(order.size()) + " runs with the largest " + header[*worst_by];
-    t.corner = "run";
-    for (std::size_t c = 1; c <= n_axes; ++c) t.columns.push_back(header[c]);
-    t.columns.push_back(header[*worst_by]);
-    t.columns.push_back("report");
-    for (const std::size_t r : order) {
-      const std::string& run = rows[r][0];
-      std::vector<std::string> cells;
-      for (std::size_t c = 1; c <= n_axes; ++c) cells.push_back(htmlEscape(rows[r][c]));
-      cells.push_back(g4(*number(rows[r][*worst_by])));
-      const fs::path run_dir = dir / "runs" / run;
-      const auto link = [&](const fs::path& target) {
-        return fs::absolute(target).lexically_normal().lexically_relative(fs::absolute(html_dir).lexically_normal())
-            .generic_string();
-      };
-      cells.push_back(fs::is_regular_file(run_dir / "report.html", ec)
-                          ? "<a href=\"" + htmlEscape(link(run_dir / "report.html")) + "\">report.html</a>"
-                          : "\xE2\x80\x94");
-      const std::string shown = fs::is_directory(run_dir, ec)
-                                    ? "<a href=\"" + htmlEscape(link(run_dir)) + "/\">" + htmlEscape(run) + "</a>"
-                                    : htmlEscape(run);
-      t.rows.push_back({run, cells});
-      t.rows.back().first = shown;  // the row heading is HTML here (a link), escaped above
-    }
-    html += "<h2 id=\"worst\">Worst runs</h2>\n<p>By <code>" + htmlEscape(header[*worst_by]) +
-            "</code> (largest first). A run links to its directory when the sweep kept it (<code>--keep "
-            "metrics</code> or <code>all</code>), and to its report when one was written there.</p>\n";
-    // tableHtml escapes row headings; the links are built here instead.
-    std::string h = "<table>\n<caption>" + htmlEscape(t.caption) + "</caption>\n<tr><th>run</th>";
-    for (const auto& c : t.columns) h += "<th>" + htmlEscape(c) + "</th>";
-    h += "</tr>\n";
-    for (const auto& [head, cells] : t.rows) {
-      h += "<tr><th>" + head + "</th>";
-      for (const auto& c : cells) h += "<td>" + c + "</td>";
-      h += "</tr>\n";
-    }
-    html += h + "</table>\n";
-  }
-  if (!metrics.empty()) {
-    Table t;
-    t.caption = "each numeric metric over the runs";
-    t.columns = {"least", "median", "greatest", "runs with a value"};
-    for (const Metric& m : metrics) {
-      std::vector<double> v;
-      for (double x : m.v)
-        if (std::isfinite(x)) v.push_back(x);
-      t.rows.push_back({header[m.column],
-                        {g4(*std::min_element(v.begin(), v.end())), g4(median(v)),
-                         g4(*std::max_element(v.begin(), v.end())), std::to_string(v.size())}});
-    }
-    html += "<h2 id=\"metrics\">Metrics</h2>\n" + tableHtml(t);
-  }
+  if (worst_by) html += worstRunsHtml(dir, html_dir, rows, n_axes, *worst_by);
+  if (!metrics.empty()) html += metricsSummaryHtml(header, metrics);
   return html + pageTail();
 }
 

@@ -8,12 +8,12 @@
 
 #include <algorithm>
 #include <charconv>
-#include <fstream>
-#include <sstream>
 #include <string_view>
 #include <unordered_map>
 #include <utility>
 
+#include "base/read_file.hpp"
+#include "base/text.hpp"
 #include "eval/scenario/message_text.hpp"
 #include "eval/tools/sweep/sweep_internal.hpp"
 #include "eval/scenario/yaml_documents.hpp"
@@ -23,6 +23,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace sweep_detail;
+using base::allDigits;
+using base::split;
 
 // Bounds the product so a typo cannot start validating (and storing, ~3 kB each) millions of
 // scenarios; a bigger study is several sweep files.
@@ -120,28 +122,12 @@ std::string emitYaml(const YAML::Node& root) {
 
 namespace sweep_detail {
 
-std::vector<std::string> split(std::string_view text, char sep) {
-  std::vector<std::string> out;
-  for (std::size_t start = 0;;) {
-    const auto end = text.find(sep, start);
-    out.emplace_back(text.substr(start, end - start));
-    if (end == std::string_view::npos) return out;
-    start = end + 1;
-  }
-}
-
-bool allDigits(std::string_view s) {
-  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) { return c >= '0' && c <= '9'; });
-}
-
 std::string readText(const fs::path& file, const std::string& who) {
-  std::error_code ec;
-  std::ifstream in(file, std::ios::binary);
-  if (!in || fs::is_directory(file, ec)) throw SweepError(who + ": cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw SweepError(who + ": cannot read file");
-  return text.str();
+  try {
+    return base::readFile(file);
+  } catch (const base::ReadError& e) {
+    throw SweepError(who + ": " + e.what());
+  }
 }
 
 }  // namespace sweep_detail

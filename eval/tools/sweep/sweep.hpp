@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "eval/scenario/scenario.hpp"
+#include "eval/tools/shards.hpp"
 
 namespace ambler::eval {
 
@@ -47,11 +48,6 @@ Sweep parseSweep(const std::string& yaml_text, const std::filesystem::path& file
 
 enum class Keep { None, Metrics, All };  // what stays of each run directory after its row is read
 
-struct Shard {
-  int index = 1;  // K, 1-based: this shard runs the runs k with k mod count == K - 1
-  int count = 1;  // N
-};
-
 struct SweepOptions {
   std::filesystem::path out;
   std::optional<Shard> shard;  // absent: every run, written to out/results.csv
@@ -62,8 +58,6 @@ struct SweepOptions {
   bool resume = false;   // keep the runs the journal records as finished; run only the rest
 };
 
-// "K/N" with 1 <= K <= N. Throws SweepError naming --shard.
-Shard parseShard(const std::string& text);
 // "none", "metrics" or "all". Throws SweepError naming --keep.
 Keep parseKeep(const std::string& text);
 

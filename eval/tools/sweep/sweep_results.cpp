@@ -6,11 +6,11 @@
 #include <algorithm>
 #include <cstdio>
 #include <optional>
-#include <regex>
 #include <string>
 #include <utility>
 
 #include "eval/scenario/io.hpp"
+#include "base/text.hpp"
 #include "eval/scenario/message_text.hpp"
 #include "eval/tools/sweep/sweep_internal.hpp"
 
@@ -19,27 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace sweep_detail;
+using base::allDigits;
 
 // ---- results ----------------------------------------------------------------------------------
-
-std::string csvCell(const std::string& text) {
-  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
-  std::string out = "\"";
-  for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
-
-// GCC 12 warns falsely on "literal" + std::string here (-Wrestrict, PR 105651; inQuotes in
-// scenario_reader.cpp dodges the same warning). It did not while this code shared one file with
-// the rest of the sweep, where GCC inlined differently.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wrestrict"
-std::string csvText(const std::vector<std::string>& cells) {
-  std::string out;
-  for (std::size_t i = 0; i < cells.size(); ++i) out += (i ? "," : "") + csvCell(cells[i]);
-  return out;
-}
-#pragma GCC diagnostic pop
 
 // RFC 4180 records; nullopt when a quote is left open or stray.
 std::optional<std::vector<std::vector<std::string>>> parseCsv(const std::string& text) {
@@ -89,52 +71,11 @@ std::optional<std::vector<std::vector<std::string>>> parseCsv(const std::string&
 
 namespace sweep_detail {
 
-std::string csvLine(const std::vector<std::string>& cells) { return csvText(cells) + "\n"; }
-
 std::vector<std::string> axisCells(const Sweep& sweep, std::size_t k) {
   std::vector<std::string> cells{std::to_string(k)};
   const auto combination = sweep.combination(k);
   for (std::size_t a = 0; a < sweep.axes.size(); ++a) cells.push_back(sweep.axes[a].cells[combination[a]]);
   return cells;
-}
-
-std::string shardName(const Shard& s, const std::string& stem, const std::string& ext) {
-  return stem + ".shard-" + std::to_string(s.index) + "-of-" + std::to_string(s.count) + ext;
-}
-
-std::vector<std::pair<Shard, fs::path>> shardFiles(const fs::path& out, const std::string& stem) {
-  const std::string where = out.string();
-  std::error_code ec;
-  if (!fs::is_directory(out, ec)) throw SweepError(where + ": no such directory");
-  const std::regex pattern(stem + R"(\.shard-([0-9]{1,9})-of-([0-9]{1,9})\.csv)");
-  std::vector<std::pair<Shard, fs::path>> files;
-  for (const auto& entry : fs::directory_iterator(out)) {
-    std::smatch m;
-    const std::string name = entry.path().filename().string();
-    if (!std::regex_match(name, m, pattern)) continue;
-    files.emplace_back(Shard{std::stoi(m[1]), std::stoi(m[2])}, entry.path());
-  }
-  if (files.empty()) throw SweepError(where + ": no " + stem + ".shard-K-of-N.csv files to merge");
-  std::sort(files.begin(), files.end(), [](const auto& a, const auto& b) {
-    return std::pair(a.first.count, a.first.index) < std::pair(b.first.count, b.first.index);
-  });
-  const int n = files.front().first.count;
-  if (files.back().first.count != n) {
-    throw SweepError(where + ": shards of different splits (" + files.front().second.filename().string() +
-                     ", " + files.back().second.filename().string() + "): remove the stale ones");
-  }
-  for (const auto& [shard, path] : files) {
-    if (shard.index < 1 || shard.index > n)
-      throw SweepError(path.string() + ": no shard " + std::to_string(shard.index) + " of " +
-                       std::to_string(n));
-  }
-  for (int k = 1; k <= n; ++k) {
-    if (std::none_of(files.begin(), files.end(), [&](const auto& f) { return f.first.index == k; })) {
-      throw SweepError((out / shardName(Shard{k, n}, stem)).string() + ": missing (shard " + std::to_string(k) +
-                       " of " + std::to_string(n) + ")");
-    }
-  }
-  return files;
 }
 
 }  // namespace sweep_detail
@@ -145,7 +86,14 @@ std::optional<std::vector<std::vector<std::string>>> parseResultsCsv(const std::
 
 fs::path mergeSweep(const Sweep& sweep, const fs::path& out, bool progress) {
   const std::string where = out.string();
-  const auto files = shardFiles(out, "results");
+  // The shards' files; what is wrong with them is the sweep's error, as every other merge refusal.
+  const auto files = [&] {
+    try {
+      return shardFiles(out, "results");
+    } catch (const ShardError& e) {
+      throw SweepError(e.what());
+    }
+  }();
   const int n = files.front().first.count;
 
   const std::size_t total = sweep.runs.size();
@@ -206,7 +154,7 @@ fs::path mergeSweep(const Sweep& sweep, const fs::path& out, bool progress) {
   for (std::size_t k = 0; k < total; ++k) {
     if (!rows[k]) {
       throw SweepError(where + ": run " + std::to_string(k) + " is missing (expected in " +
-                       shardName(Shard{int(k % std::size_t(n)) + 1, n}) + ")");
+                       shardName(Shard{int(k % std::size_t(n)) + 1, n}, "results") + ")");
     }
   }
   std::string text = csvLine(header);

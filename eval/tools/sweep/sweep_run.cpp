@@ -18,7 +18,9 @@
 #include <unordered_map>
 #include <utility>
 
+#include "base/digest.hpp"
 #include "eval/scenario/io.hpp"
+#include "eval/tools/jobs.hpp"
 #include "eval/tools/journal.hpp"
 #include "eval/tools/progress.hpp"
 #include "eval/run/runner.hpp"
@@ -57,7 +59,7 @@ void flatten(const nlohmann::ordered_json& j, const std::string& path, bool timi
   }
   std::string text;
   if (j.is_number_float()) {
-    text = numberText(j.get<double>());
+    text = csvNumber(j.get<double>());
   } else if (j.is_number_unsigned()) {
     text = std::to_string(j.get<std::uint64_t>());
   } else if (j.is_number_integer()) {
@@ -189,31 +191,10 @@ std::string journalIdentity(const Sweep& sweep, const SweepOptions& opt, const s
                      "\nmetrics=";
   for (const auto& m : sweep.metrics) text += m + ",";
   for (const std::size_t k : todo) text += "\nrun " + std::to_string(k) + "\n" + resolvedYaml(sweep.runs[k]);
-  return identityDigest(text);
+  return base::digest(text);
 }
 
 }  // namespace
-
-std::string sweep_detail::numberText(double v) {
-  if (!std::isfinite(v)) return "";  // as in metrics.json, where a non-finite number is null
-  char buf[32];
-  return std::string(buf, std::to_chars(buf, buf + sizeof buf, v).ptr);
-}
-
-Shard parseShard(const std::string& text) {
-  const auto parts = split(text, '/');
-  Shard s;
-  const auto parse = [](const std::string& p, int& v) {
-    return allDigits(p) && p.size() <= 9 &&
-           std::from_chars(p.data(), p.data() + p.size(), v).ec == std::errc();
-  };
-  if (parts.size() != 2 || !parse(parts[0], s.index) || !parse(parts[1], s.count) || s.index < 1 ||
-      s.index > s.count) {
-    throw SweepError("--shard: expected K/N with 1 <= K <= N (shard K of N, 1-based), got " +
-                     yamlQuoted(text));
-  }
-  return s;
-}
 
 Keep parseKeep(const std::string& text) {
   if (text == "none") return Keep::None;
@@ -235,12 +216,8 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
                      ": the sweep has " + std::to_string(total) + " runs, so at most " +
                      std::to_string(total) + " shards");
   }
-  std::vector<std::size_t> todo;
-  for (std::size_t k = 0; k < total; ++k) {
-    if (!opt.shard || k % std::size_t(opt.shard->count) == std::size_t(opt.shard->index - 1))
-      todo.push_back(k);
-  }
-  const fs::path csv = opt.out / (opt.shard ? shardName(*opt.shard) : "results.csv");
+  const std::vector<std::size_t> todo = shardItems(total, opt.shard);
+  const fs::path csv = opt.out / (opt.shard ? shardName(*opt.shard, "results") : "results.csv");
   const fs::path journal_file = opt.out / (opt.shard ? shardName(*opt.shard, "results", ".journal") : "results.journal");
   const std::size_t jobs = std::min<std::size_t>(std::size_t(opt.jobs), todo.size());
 
@@ -269,52 +246,25 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
         " runs recorded in " + journal_file.string() +
         (journal.done.torn_tail ? " (a run cut short while being recorded is run again)" : ""));
 
-  std::mutex mutex;  // guards the progress, the journal and the first error
   Progress progress("sweep " + sweep.name, todo.size(), todo.size() - pending.size(), mode);
-  std::atomic<std::size_t> next{0};
-  std::atomic<bool> stop{false};
-  std::optional<std::pair<std::size_t, std::string>> error;  // the failed run of lowest index
-  std::optional<std::string> journal_error;                   // the journal could not be written
-  const auto work = [&] {
-    for (std::size_t p; !stop && (p = next++) < pending.size();) {
-      const std::size_t i = pending[p];
-      const std::size_t k = todo[i];
-      try {
-        const fs::path dir = opt.out / "runs" / std::to_string(k);
-        fs::remove_all(dir);  // no files of an earlier sweep (or a killed attempt) left beside this run's
-        const auto metrics = runScenario(sweep.runs[k], RunOptions{dir, false});
-        flatten(metrics, "", opt.timing, rows[i]);
-        prune(dir, opt.keep);
-        const std::lock_guard lock(mutex);
-        journal.writer->append(k, rowPayload(rows[i]));
-        progress.step(progressLine(sweep, k, metrics));
-      } catch (const JournalError& e) {
-        stop = true;
-        const std::lock_guard lock(mutex);
-        if (!journal_error) journal_error = e.what();
-      } catch (const std::exception& e) {
-        stop = true;
-        const std::lock_guard lock(mutex);
-        if (!error || k < error->first) error.emplace(k, e.what());
-      }
-    }
-  };
-  if (jobs <= 1) {
-    work();
-  } else {
-    std::vector<std::jthread> threads;
-    for (std::size_t j = 0; j < jobs; ++j) threads.emplace_back(work);
-  }
+  const std::optional<JobFailure> error = runJobs(todo, pending, opt.jobs, *journal.writer, progress, [&](std::size_t i) {
+    const std::size_t k = todo[i];
+    const fs::path dir = opt.out / "runs" / std::to_string(k);
+    fs::remove_all(dir);  // no files of an earlier sweep (or a killed attempt) left beside this run's
+    const auto metrics = runScenario(sweep.runs[k], RunOptions{dir, false});
+    flatten(metrics, "", opt.timing, rows[i]);
+    prune(dir, opt.keep);
+    return JobRecord{rowPayload(rows[i]), progressLine(sweep, k, metrics)};
+  });
   progress.finish();
-  if (journal_error) throw JournalError(*journal_error);
   if (error) {
     std::string values;
-    const auto combination = sweep.combination(error->first);
+    const auto combination = sweep.combination(error->item);
     for (std::size_t a = 0; a < sweep.axes.size(); ++a) {
       values += (a ? ", " : "") + sweep.axes[a].key + " = " + sweep.axes[a].values[combination[a]];
     }
-    throw SweepError(sweep.file.string() + ": run " + std::to_string(error->first) + " (" + values +
-                     "): " + error->second);
+    throw SweepError(sweep.file.string() + ": run " + std::to_string(error->item) + " (" + values +
+                     "): " + error->message);
   }
   if (opt.keep == Keep::None) {
     std::error_code ec;

@@ -1,0 +1,15 @@
+#pragma once
+// Wall-clock time since construction (a monotonic clock), for the timings runs report.
+#include <chrono>
+
+namespace ambler::base {
+
+class Stopwatch {
+ public:
+  double seconds() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count(); }
+
+ private:
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+};
+
+}  // namespace ambler::base
