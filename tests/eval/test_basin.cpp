@@ -15,6 +15,7 @@
 #include "perception/rigid_transform.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "test_support.hpp"
+#include "two_view_mars.hpp"
 
 namespace ambler::eval {
 namespace {
@@ -23,25 +24,12 @@ namespace fs = std::filesystem;
 using test::slurp;
 using test::TempDir;
 
-// The demo's Mars-like patch and views, noise-free, on a smaller map.
+// The two-view Mars scene as it is (the demo's patch and first view), noise-free.
 std::string scenario(const std::string& methods, bool with_matching = true) {
-  std::string s = R"(name: basin_test
-seed: 5
-terrain:
-  kind: mars
-  size_m: [20, 20]
-  cell_m: 0.05
-  rocks: {abundance_k: 0.08, min_diameter_m: 0.1, max_diameter_m: 1.0}
-  craters: {count: 3, min_diameter_m: 1.0, max_diameter_m: 4.0}
-sensor: {noise_k: 0, quantization_m: 0, mixed_pixels: false}
-views:
-  - {xyz_m: [0, -6, 3.0], rpy_deg: [0, -30, 0]}
-  - {xyz_m: [0.3, -5.2, 3.0], rpy_deg: [0, -30, 5]}
-map:
-  cell_m: 0.10
-  region: {x_m: [-4, 4], y_m: [-2, 6]}
-  baseline: none
-)";
+  test::TwoViewMars scene;
+  scene.name = "basin_test";
+  scene.sensor = test::kNoiseFreeSensor;
+  std::string s = scene.yaml();
   if (with_matching) s += "matching:\n  methods: [" + methods + "]\n";
   return s;
 }

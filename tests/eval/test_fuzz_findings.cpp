@@ -1,6 +1,6 @@
-// Regression tests for what the fuzz targets found (tests/fuzz/, docs/fuzzing.md): each input is
-// the one libFuzzer saved (or a readable reduction of it), and each test checks the message the
-// reader now gives. The contract: one line, "<file>: <key>: <what is wrong>".
+// The inputs the fuzz targets found outside the readers' contract (tests/fuzz/, docs/fuzzing.md):
+// each input is the one libFuzzer saved (or a readable reduction of it), and each test checks the
+// reader's message for it. The contract: one line, "<file>: <key>: <what is wrong>".
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -26,8 +26,8 @@ std::string messageOf(F f) {
   return "(no error)";
 }
 
-// Finding 1 (fuzz_scenario, 30 s): yaml-cpp's "unknown escape character: " message ends with the
-// character itself, here a line break, and the scenario reader passed it on.
+// From fuzz_scenario: yaml-cpp's "unknown escape character: " message ends with the character
+// itself, here a line break; the scenario reader escapes it, so the message stays one line.
 TEST(FuzzFindings, ScenarioYamlErrorWithALineBreakIsOneLine) {
   const std::string crash("ncml\xa7)iconic_weightede:\x15\x00\n", 26);
   EXPECT_EQ(messageOf<ScenarioError>([&] { parseScenario(crash, "s.yaml"); }),
@@ -39,7 +39,7 @@ TEST(FuzzFindings, ScenarioYamlErrorWithALineBreakIsOneLine) {
   EXPECT_EQ(message.find('\n'), std::string::npos) << message;
 }
 
-// Finding 2 (fuzz_sweep, 30 s): the same yaml-cpp message through the sweep reader.
+// From fuzz_sweep: the same yaml-cpp message through the sweep reader.
 TEST(FuzzFindings, SweepYamlErrorWithALineBreakIsOneLine) {
   const std::string crash(
       "n8ame: resoluti9\x00\ndescriptio\x8a\xba \"fr\xf0.0.rms_eactactal ase]\n", 57);
@@ -49,8 +49,8 @@ TEST(FuzzFindings, SweepYamlErrorWithALineBreakIsOneLine) {
             "w.yaml: a\\nb: unknown key (allowed: name, description, base, axes, metrics)");
 }
 
-// Finding 3 (fuzz_results_csv, 30 s): a shard row whose axis cells differ from the sweep's is
-// reported with its cells, and a quoted cell may hold a line break.
+// From fuzz_results_csv: a shard row whose axis cells differ from the sweep's is reported with
+// its cells, and a quoted cell may hold a line break, which the message escapes.
 TEST(FuzzFindings, MergeMessageWithALineBreakInACellIsOneLine) {
   test::TempDir d;
   const Sweep sweep = loadSweep(fs::path(AMBLER_SOURCE_DIR) / "scenarios/sweeps/noise_check.yaml");
@@ -62,10 +62,10 @@ TEST(FuzzFindings, MergeMessageWithALineBreakInACellIsOneLine) {
                 "0,30;0,\"{noise_k: 0, quantization_m: 0}\" (was it edited after the shards ran?)");
 }
 
-// Finding 4 (fuzz_scenario and fuzz_sweep, 600 s runs, after ~6 100 and ~1 300 executions): a
-// hang. yaml-cpp 0.7.0's LoadAll loops for ever, allocating, on a token that starts no node (a lone
-// ",", yaml-cpp issue 1040); eval/scenario/yaml_documents.hpp guards every LoadAll of the readers. The
-// saved inputs were a scenario and a sweep with a stray "," at the start of line 2.
+// From fuzz_scenario and fuzz_sweep: a hang. yaml-cpp 0.7.0's LoadAll loops for ever, allocating,
+// on a token that starts no node (a lone ",", yaml-cpp issue 1040); eval/scenario/yaml_documents.hpp
+// guards every LoadAll of the readers. The saved inputs are a scenario and a sweep with a stray
+// "," at the start of line 2.
 TEST(FuzzFindings, ALoneCommaIsASyntaxErrorNotAHang) {
   EXPECT_EQ(messageOf<ScenarioError>([] { parseScenario(",", "s.yaml"); }),
             "s.yaml: line 1, column 1: YAML syntax error: unexpected token (it starts no value)");

@@ -19,6 +19,7 @@
 #include "eval/run/runner.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "test_support.hpp"
+#include "two_view_mars.hpp"
 
 namespace ambler::eval {
 namespace {
@@ -73,23 +74,18 @@ std::vector<std::string> row(const std::string& html, const std::string& caption
   return cells;
 }
 
-// Two views of Mars-like ground, mapped, small enough to run in seconds; `extra` adds stages.
+// The small two-view Mars scene, mapped, with fewer rocks and the kind's craters; `extra` adds
+// stages.
 std::string scenario(const std::string& name, const std::string& extra) {
-  return "name: " + name + R"(
-seed: 3
-terrain:
-  kind: mars
-  size_m: [8, 8]
-  cell_m: 0.1
-  rocks: {abundance_k: 0.05, min_diameter_m: 0.15, max_diameter_m: 0.6}
-sensor: {rows: 32, cols: 128}
-views:
-  - {xyz_m: [0, -3.5, 2.0], rpy_deg: [0, -30, 0]}
-  - {xyz_m: [0.3, -3.3, 2.0], rpy_deg: [0, -30, 4]}
-map:
-  cell_m: 0.10
-  region: {x_m: [-2, 2], y_m: [-2, 3]}
-)" + extra;
+  test::TwoViewMars scene = test::TwoViewMars::small();
+  scene.name = name;
+  scene.seed = 3;
+  scene.rocks = "{abundance_k: 0.05, min_diameter_m: 0.15, max_diameter_m: 0.6}";
+  scene.craters = "";
+  scene.view1 = "{xyz_m: [0.3, -3.3, 2.0], rpy_deg: [0, -30, 4]}";
+  scene.map_region = "{x_m: [-2, 2], y_m: [-2, 3]}";
+  scene.map_baseline = "";
+  return scene.yaml() + extra;
 }
 
 // Every PNG under `dir`, as paths relative to it.

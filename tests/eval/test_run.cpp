@@ -20,11 +20,11 @@
 #include "perception/sensor_geometry.hpp"
 #include "picture_checks.hpp"
 #include "sim/ground_truth.hpp"
-#include "sim/leg.hpp"
 #include "sim/ray_scene.hpp"
 #include "sim/world.hpp"
 #include "terrains/terrain.hpp"
 #include "test_support.hpp"
+#include "two_view_mars.hpp"
 
 namespace ambler::eval {
 namespace {
@@ -32,23 +32,19 @@ namespace {
 namespace fs = std::filesystem;
 using test::slurp;
 
-const char* kScenario = R"(
-name: run_test
-seed: 11
-terrain:
-  kind: mars
-  size_m: [8, 8]
-  cell_m: 0.1
-  relief_m: 0.4
-  rocks: {abundance_k: 0.1, min_diameter_m: 0.15, max_diameter_m: 0.8}
-  craters: {count: 2, min_diameter_m: 1.0, max_diameter_m: 2.0}
-sensor:
-  rows: 32
-  cols: 128
-views:
-  - {xyz_m: [0, -3.5, 2.0], rpy_deg: [0, -30, 0]}
-  - {xyz_m: [0.5, -3.0, 2.0], rpy_deg: [0, -35, 10]}
-)";
+// The small two-view Mars scene with 0.4 m of relief, more rocks and two craters; no map.
+test::TwoViewMars smallScene() {
+  test::TwoViewMars scene = test::TwoViewMars::small();
+  scene.name = "run_test";
+  scene.seed = 11;
+  scene.relief_m = "0.4";
+  scene.rocks = "{abundance_k: 0.1, min_diameter_m: 0.15, max_diameter_m: 0.8}";
+  scene.craters = "{count: 2, min_diameter_m: 1.0, max_diameter_m: 2.0}";
+  scene.view1 = "{xyz_m: [0.5, -3.0, 2.0], rpy_deg: [0, -35, 10]}";
+  scene.map_region = "";
+  return scene;
+}
+const std::string kScenario = smallScene().yaml();
 
 // A view inside a rock, below the ground or off the terrain is refused before the run writes
 // anything, in one line naming the view and both heights (docs/errors.md, "Views").
@@ -194,8 +190,10 @@ TEST(Run, WorldAndScanPicturesShowTheTruthAndTheScans) {
 // the colour of state.png's state, the elevation picture's cells in reliefImage's colour of the
 // elevation TIFF (shadow hatched).
 TEST(Run, MapStagesWriteEveryMapFileAndPicturesOfThem) {
-  Scenario sc = parseScenario(std::string(kScenario) + "map:\n  cell_m: 0.1\n  region: {x_m: [-2, 2], y_m: [-1, 3]}\n",
-                              "inline.yaml");
+  test::TwoViewMars scene = smallScene();
+  scene.map_region = "{x_m: [-2, 2], y_m: [-1, 3]}";
+  scene.map_baseline = "";
+  Scenario sc = parseScenario(scene.yaml(), "inline.yaml");
   ASSERT_TRUE(sc.map.has_value());
   ASSERT_EQ(sc.map->baseline, Baseline::Cartesian);
   test::TempDir run;
@@ -276,31 +274,21 @@ TEST(Run, SameSeedGivesByteIdenticalFiles) {
 }
 
 
-// Two views of Mars-like ground with rocks and craters, 16 m square, mapped at 10 cm: view 0 at
-// (0, −6, 3) looking 30° down along +y, view 1 at the pose `view1` ("[x, y, z], rpy_deg: [...]").
+// The two-view Mars scene on a 16 m square, mapped on 8 × 9 m, view 1 at the pose `view1`
+// ("[x, y, z], rpy_deg: [...]").
 std::string twoViews(const std::string& name, const std::string& view1) {
-  return "name: " + name + R"(
-seed: 5
-terrain:
-  kind: mars
-  size_m: [16, 16]
-  cell_m: 0.05
-  rocks: {abundance_k: 0.08, min_diameter_m: 0.1, max_diameter_m: 1.0}
-  craters: {count: 3, min_diameter_m: 1.0, max_diameter_m: 4.0}
-views:
-  - {xyz_m: [0, -6, 3.0], rpy_deg: [0, -30, 0]}
-  - {xyz_m: )" + view1 + R"(}
-map:
-  cell_m: 0.10
-  region: {x_m: [-4, 4], y_m: [-3, 6]}
-  baseline: none
-)";
+  test::TwoViewMars scene;
+  scene.name = name;
+  scene.size_m = "[16, 16]";
+  scene.view1 = "{xyz_m: " + view1 + "}";
+  scene.map_region = "{x_m: [-4, 4], y_m: [-3, 6]}";
+  return scene.yaml();
 }
 
 // The match stage end to end: two views of Mars-like ground with rocks, the ERIM's noise,
 // quantisation and mixed pixels, view 1 believed 0.3 m and 3° off. Each method's file and
 // registration entry are written; T_true is the views' relative pose; both iconic methods land
-// within the matching issue's bound for a noisy sensor (5 cm and 0.5°), far inside the start.
+// within the bound for a noisy sensor (5 cm and 0.5°, docs/matching.md), far inside the start.
 TEST(Run, MatchStageRegistersTheViewsAgainstTheTruePose) {
   const std::string yaml = twoViews("match_test", "[0, -5, 3.0], rpy_deg: [0, -30, 5]") + R"(matching:
   methods: [iconic_robust, iconic_lm]
@@ -461,9 +449,11 @@ leg: {soil: )") + soil + ", load_n: 3000}\n",
           EXPECT_LT(std::abs(predicted.at<float>(r, c)), 0.01);
         }
     EXPECT_EQ(candidates, 64);
-    sim::LegConfig config;
-    config.load_n = 3000;
-    const double expected_sink = std::string(soil) == "sand" ? sim::bekkerSinkage(3000, config) : 0.0;
+    // Bekker's law by hand for the scenario's 3 kN on the 30 cm foot in dry sand (the working is in
+    // tests/sim/test_leg.cpp): z = (W/(π·b²)/(k_c/b + k_φ))^(1/n) = 38.31 mm.
+    const double b = 0.15, n = 1.1, k_c = 0.99e3, k_phi = 1528.43e3;
+    const double bekker = std::pow(3000 / (std::numbers::pi * b * b) / (k_c / b + k_phi), 1.0 / n);
+    const double expected_sink = std::string(soil) == "sand" ? bekker : 0.0;
     for (const auto& f : metrics["footfall"]) {
       const auto& leg = f["leg"];
       SCOPED_TRACE(std::string(soil) + " " + f["method"].get<std::string>());

@@ -77,14 +77,14 @@ Mapped mapView(const Scene& s, const perception::SensorModel& sensor, const View
   return m;
 }
 
-// The issue's range of drop-offs: drops (m), sensor heights above the high side (m), lip
+// The drop-offs the map is tested on: drops (m), sensor heights above the high side (m), lip
 // distances (m), and the lip square to the view or turned (degrees).
 constexpr std::array kDrops{0.2, 0.45, 0.6};
 constexpr std::array kHeights{2.0, 4.0};
 constexpr std::array kDistances{4.0, 6.5, 10.0};
 constexpr std::array kLipAngles{0.0, 30.0};
 
-// A drop-off of the issue's range seen from its high side: the sensor h above the high side at
+// A drop-off of that range seen from its high side: the sensor h above the high side at
 // x = d, looking towards −x across the lip at x = 0 (turned angle_deg from square to it), and the
 // map from 8 m past the lip back to the sensor.
 std::pair<ViewSpec, MapSpec> dropOffView(double drop, double h, double d, double angle_deg) {
@@ -103,7 +103,7 @@ perception::SensorModel noiseFree() {
   return s;
 }
 
-// A drop-off seen from its high side, across the issue's range: drops of 0.2–0.6 m, the sensor
+// A drop-off seen from its high side, across the tested range: drops of 0.2–0.6 m, the sensor
 // 2–4 m above the high side and 4–10 m from the lip, the lip square to the view and at 30° to
 // it, the sensor ideal (no noise, quantisation or mixed pixels) and as the ERIM is.
 //
@@ -188,14 +188,15 @@ TEST(MapEdges, DropOffSeenFromItsHighSide) {
 
 // The lip top with the ERIM, where the lip is a box's edge: the first lip-top cell is centred
 // 5 cm from the edge (the heightfield's lip above has a 5 cm ramp, and its cell on the ramp's upper
-// edge is not counted). Two things kept such cells out of the shadow (docs/locus.md), over the
-// issue's poses and 10 seeds (360 scenes). From far away, where a footprint covers 24–45 cm of
-// ground, a pixel just short of the edge may read a count past the near surface and pass for a
-// mixed pixel wholly on the near surface; the near surface then reaches as far as the next
-// footprint, read as the far surface's within the cubature's error, allows (with the footprint's
-// own rim as the bound: 30 cells, from 10 m). And the final cell's test for an edge across
-// columns counts only edge pixels whose breaks run across columns (counting the lip's edge
-// pixels, a two-count column jump beside them made 8 cells shadow, from 6.5 m).
+// edge is not counted), over the 36 poses of the tested range and 10 seeds (360 scenes). Two rules
+// of the map keep such cells out of the shadow (docs/locus.md). From far away, where a footprint
+// covers 24–45 cm of ground, a pixel just short of the edge may read a count past the near surface
+// and pass for a mixed pixel wholly on the near surface; the near surface then reaches as far as
+// the next footprint, read as the far surface's within the cubature's error, allows (bounded by
+// the footprint's own rim instead, 30 cells from 10 m fall in the shadow). And the final cell's
+// test for an edge across columns counts only edge pixels whose breaks run across columns
+// (counting the lip's edge pixels too, a two-count column jump beside them puts 8 cells in the
+// shadow from 6.5 m).
 TEST(MapEdges, BoxEdgeLipTopsStayOutOfTheShadowWithTheErim) {
   long in_shadow = 0, lip_top = 0;
   for (const double drop : kDrops) {
@@ -226,14 +227,14 @@ TEST(MapEdges, BoxEdgeLipTopsStayOutOfTheShadowWithTheErim) {
 // occluding edge"): two drop-offs whose lips lie δ apart inside the same scanline gap give the
 // same image, bit for bit, so any mapper gives them the same map. The cells between the two lips
 // are the visible top of the farther lip and hidden ground behind the nearer one; a map that never
-// calls a visible lip top shadow (the issue's other item) leaves them out of the nearer lip's
-// shadow, and its recall there is at most 1 − (those cells)/(its hidden cells), whatever the
-// mapper. Shown for the square lips of the issue's range with the sensor ideal (its "noise,
-// quantisation and mixed pixels off"), the lip a box's edge on a plane so that it can move by any
-// δ: the bound falls below 0.9 where the scanline gap is wide against the shadow, so no mapper
-// meets both items there. The maps of each pair are the same bits (the mapper reads nothing
-// else), this map keeps the far lip's top out of the shadow too, and its recall is the bound
-// wherever a cell is contested: it gives away nothing the image does not force.
+// calls a visible lip top shadow (the other goal) leaves them out of the nearer lip's shadow, and
+// its recall there is at most 1 − (those cells)/(its hidden cells), whatever the mapper. Shown for
+// the square lips of the tested range with the sensor ideal (noise, quantisation and mixed pixels
+// off), the lip a box's edge on a plane so that it can move by any δ: the bound falls below 0.9
+// where the scanline gap is wide against the shadow, so no mapper meets both goals there. The
+// maps of each pair are the same bits (the mapper reads nothing else), this map keeps the far
+// lip's top out of the shadow too, and its recall is the bound wherever a cell is contested: it
+// gives away nothing the image does not force.
 TEST(MapEdges, NoMapPlacesALipInsideItsScanlineGap) {
   const auto sameBits = [](const perception::Raster<float>& a, const perception::Raster<float>& b) {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(float) * std::size_t(a.size())) == 0;
@@ -281,7 +282,7 @@ TEST(MapEdges, NoMapPlacesALipInsideItsScanlineGap) {
         }
         below += bound < 0.9;
       }
-  EXPECT_GE(below, 2);  // the issue's range has poses no mapper can meet
+  EXPECT_GE(below, 2);  // the tested range has poses where no mapper can reach 0.9
 }
 
 // The rule above is the run's; the maps registration matches trust the samples at edges

@@ -1,6 +1,6 @@
 // Registration that knows when it has failed, end to end (docs/matching.md, "Verification and
 // acceptance"): the demo terrains whose feature stage pairs wrongly (seeds 14 and 107: T_F 1–3 m
-// off) no longer mislead the two-stage methods, and never silently; and a four-view composite
+// off) do not mislead the two-stage methods, and never silently; and a four-view composite
 // (scenarios/experiments/composite_rejected.yaml) whose last link fails is built from the views
 // the rover could place, within 1.3× the RMS error of the composite at the true poses, naming the
 // link it rejected.
@@ -35,6 +35,8 @@ TEST(Verification, TheDemosWrongFeatureStagesNeitherMisleadNorPassSilently) {
     if (seed == 14) sc.matching->methods.push_back(MatchMethod::FeaturesIconic);  // the paper's descent, as printed
     test::TempDir run;
     const auto metrics = runScenario(sc, {run.dir, false});
+    // One registration per method (one pair): every method below is checked.
+    ASSERT_EQ(metrics["registration"].size(), sc.matching->methods.size()) << "seed " << seed;
     for (const auto& m : metrics["registration"]) {
       const std::string method = m["method"].get<std::string>();
       const double t = m["translation_error_m"].get<double>(), r = m["rotation_error_deg"].get<double>();
@@ -62,10 +64,14 @@ TEST(Verification, TheDemosWrongFeatureStagesNeitherMisleadNorPassSilently) {
       const auto pair = readJson(run.dir / "matching" / file);
       const auto& hs = pair["verification"]["hypotheses"];
       double chosen = 0, t0 = 0;
+      int chosen_count = 0, t0_count = 0;
       for (const auto& h : hs) {
-        if (h["chosen"].get<bool>()) chosen = h["cost"].get<double>();
-        if (h["start"] == "T_0" && h["stage"] == "refine") t0 = h["cost"].get<double>();
+        if (h["chosen"].get<bool>()) chosen = h["cost"].get<double>(), ++chosen_count;
+        if (h["start"] == "T_0" && h["stage"] == "refine") t0 = h["cost"].get<double>(), ++t0_count;
       }
+      // One hypothesis is chosen and one refines T_0, so the comparison is between two costs.
+      EXPECT_EQ(chosen_count, 1) << "seed " << seed << " " << method;
+      EXPECT_EQ(t0_count, 1) << "seed " << seed << " " << method;
       EXPECT_LE(chosen, t0) << "seed " << seed << " " << method;
     }
   }
@@ -80,14 +86,19 @@ TEST(Verification, AFourViewCompositeLeavesOutTheLinkItRejected) {
   const auto t = runScenario(truth, {b.dir, false});
   // The premise: pair 2-3's feature stage pairs wrongly and its registration fails.
   const auto pair = readJson(a.dir / "matching" / "pair_2_3_features_iconic_lm.json");
+  int screened = 0;
   for (const auto& h : pair["verification"]["hypotheses"])
     if (h["start"] == "T_F" && h["stage"] == "screen") {
       EXPECT_GT(h["start_translation_error_m"].get<double>(), 0.5);
+      ++screened;
     }
+  EXPECT_EQ(screened, 1);  // the premise is checked on T_F's screening, not on nothing
   EXPECT_FALSE(pair["success"].get<bool>());
   EXPECT_FALSE(pair["accepted"].get<bool>());
   EXPECT_FALSE(pair["reject_reasons"].empty());
-  // No false accept among the links the composite was built on.
+  // No false accept among the links the composite was built on: the three consecutive pairs of
+  // the four views, each by the scenario's two methods.
+  ASSERT_EQ(m["registration"].size(), 3 * matched.matching->methods.size());
   for (const auto& r : m["registration"]) EXPECT_FALSE(r["false_accept"].get<bool>()) << r["pair"].dump();
   const auto& c = m["composite"];
   EXPECT_EQ(c["rejected_links"], nlohmann::json::parse("[[2, 3]]"));

@@ -98,7 +98,8 @@ using test::capsImage;
 // (0.2, −0.1, 0.05) m and 3° of yaw, so the truth is that frame's T_M2W. Both use GNC edges, so
 // that the caps' range shadows are left out (shadow cells of map 1, shadow crossings in image 2)
 // rather than bridged. Noise-free, the only bias is the two interpolations' (≤ 2 mm per line, of
-// both signs over ~2 000 lines): 5 mm and 0.05°, as the matching issue asks of noise-free terrain.
+// both signs over ~2 000 lines): 5 mm and 0.05°, the bound docs/matching.md sets for noise-free
+// terrain.
 TEST(Iconic, DescentAndLevenbergMarquardtRecoverTheTransform) {
   const Caps caps;
   SensorModel ideal;

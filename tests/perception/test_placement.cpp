@@ -102,7 +102,8 @@ TEST(Placement, AReverseStepsSigmaIsThePlacementsSpread) {
   const std::vector<ViewPlacement> p = placeViews(2, 1, P1, links);
   ASSERT_EQ(p[0].how, PlacementHow::Matched);
   const Raster<float> predicted = placementSigma(map, p[0].chain);
-  const Raster<float> wrong = registrationSigma(map, l.nu, *l.covariance);  // view J's ν, as before
+  // σ in the frame the link was registered in (view J's ν): not this composite's, the negative control.
+  const Raster<float> wrong = registrationSigma(map, l.nu, *l.covariance);
   // Monte Carlo of the placement itself: P_0(δ) = P_1·T_01(ν + δ)⁻¹ moves each map point p to
   // P_0(δ)·P_0⁻¹·p; the surface moves vertically by n·Δp/n_z. 20 000 draws: the sample σ errs by
   // 1/√(2·20 000) = 0.5 % (1σ), so 2.5 % is five σ, and the first order's own error is ~|δ|.
@@ -136,7 +137,7 @@ TEST(Placement, AReverseStepsSigmaIsThePlacementsSpread) {
     EXPECT_NEAR(predicted(r, c), mc, 0.025 * mc) << "cell " << r << ", " << c;
     wrong_differs += std::abs(wrong(r, c) - mc) > 0.1 * mc;
   }
-  EXPECT_GE(wrong_differs, 3) << "the old form should be far off somewhere (the negative control)";
+  EXPECT_GE(wrong_differs, 3) << "the registration frame's σ should be far off somewhere (the negative control)";
 }
 
 }  // namespace
