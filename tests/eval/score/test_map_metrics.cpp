@@ -17,7 +17,7 @@
 #include "eval/scenario/io.hpp"
 #include "eval/score/map_metrics.hpp"
 #include "eval/pictures/map_outputs.hpp"
-#include "picture_checks.hpp"
+#include "eval/picture_checks.hpp"
 
 namespace ambler::eval {
 namespace {

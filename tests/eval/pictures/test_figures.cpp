@@ -16,7 +16,7 @@
 #include "eval/scenario/io.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "perception/synthetic.hpp"
-#include "picture_checks.hpp"
+#include "eval/picture_checks.hpp"
 
 namespace ambler::eval {
 namespace {

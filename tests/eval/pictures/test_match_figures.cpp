@@ -19,7 +19,7 @@
 #include "eval/scenario/io.hpp"
 #include "eval/pictures/match_figures.hpp"
 #include "eval/pictures/plot.hpp"
-#include "picture_checks.hpp"
+#include "eval/picture_checks.hpp"
 
 namespace ambler::eval {
 namespace {
