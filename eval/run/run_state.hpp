@@ -18,6 +18,7 @@
 #include "perception/registration.hpp"
 #include "perception/scan_to_map.hpp"
 #include "base/stopwatch.hpp"
+#include "eval/score/footfall_score.hpp"
 #include "sim/erim_scanner.hpp"
 #include "sim/ground_truth.hpp"
 #include "sim/ray_scene.hpp"
@@ -48,12 +49,6 @@ struct PairEstimate {
 };
 
 // One footfall method's choice (footfall stage), for the leg after it.
-struct FootfallChoice {
-  std::string method;
-  double x_m, y_m;  // the chosen foot centre (NaN: no candidate)
-  double score, truth_score, truth_percentile;
-};
-
 struct RunState {
   const Scenario& scenario;
   std::filesystem::path out;

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <limits>
 
+#include "eval/score/footfall_score.hpp"
 #include "eval/pictures/figures.hpp"
 #include "eval/scenario/io.hpp"
 #include "eval/pictures/plot.hpp"
@@ -18,8 +19,6 @@
 namespace ambler::eval::stages {
 
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // The map's relief around the region (0.5 m beyond it), the region's outline and each method's
 // foot where it chose, in plotColour(k), with a legend of method and true percentile.
@@ -83,29 +82,9 @@ void run(RunState& s) {
   s.choices.clear();
   for (std::size_t m = 0; m < spec.methods.size(); ++m) {
     const std::string name(perception::footfallMethodName(spec.methods[m]));
-    FootfallChoice choice{name, kNaN, kNaN, scores[m].best_score, kNaN, kNaN};
-    if (scores[m].best) {
-      const int r = scores[m].best->x(), c = scores[m].best->y();
-      const Eigen::Vector2d xy = grid.center(r, c);
-      choice.x_m = xy.x(), choice.y_m = xy.y();
-      choice.truth_score = truths[m].score(r, c);
-      // A cell the truth rejects (no true score: e.g. too steep for planar_fit) is worse than
-      // every true candidate: percentile 1.
-      long better = 0, all = 0;
-      const auto& ts = truths[m].score;
-      for (int i = 0; i < ts.size(); ++i)
-        if (std::isfinite(ts.data()[i]))
-          ++all, better += !std::isfinite(choice.truth_score) || ts.data()[i] < choice.truth_score;
-      choice.truth_percentile = all ? double(better) / double(all) : kNaN;
-    }
+    const FootfallChoice choice = scoreChoice(name, scores[m], truths[m], grid);
     s.choices.push_back(choice);
-    nlohmann::ordered_json j;
-    j["method"] = name;
-    j["x_m"] = jsonNumber(choice.x_m);
-    j["y_m"] = jsonNumber(choice.y_m);
-    j["score"] = jsonNumber(choice.score);
-    j["truth_score"] = jsonNumber(choice.truth_score);
-    j["truth_percentile"] = jsonNumber(choice.truth_percentile);
+    const nlohmann::ordered_json j = toJson(choice);
     writeJson(s.out / "footfall" / (name + ".json"), j);
     writeGeoTiff(s.out / "footfall" / (name + "_score.tiff"), scores[m].score, grid, s.geo);
     s.metrics["footfall"].push_back(j);

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "test_support.hpp"
 #include "eval/tools/experiment/experiment.hpp"
 #include "eval/run/runner.hpp"
 #include "eval/scenario/scenario.hpp"
@@ -37,12 +38,7 @@ double csvValue(const std::vector<std::vector<std::string>>& csv, std::size_t ro
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
+using test::slurp;
 
 // The lines of the markdown section that starts with `heading`, up to the next heading.
 std::vector<std::string> section(const std::string& md, const std::string& heading) {

@@ -1,0 +1,38 @@
+#include "eval/score/footfall_score.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "eval/scenario/io.hpp"
+
+namespace ambler::eval {
+
+FootfallChoice scoreChoice(const std::string& method, const perception::FootfallScores& scores,
+                           const perception::FootfallScores& truth, const perception::MapGrid& grid) {
+  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+  FootfallChoice choice{method, kNaN, kNaN, scores.best_score, kNaN, kNaN};
+  if (!scores.best) return choice;
+  const int r = scores.best->x(), c = scores.best->y();
+  const Eigen::Vector2d xy = grid.center(r, c);
+  choice.x_m = xy.x(), choice.y_m = xy.y();
+  choice.truth_score = truth.score(r, c);
+  long better = 0, all = 0;
+  const auto& ts = truth.score;
+  for (int i = 0; i < ts.size(); ++i)
+    if (std::isfinite(ts.data()[i])) ++all, better += !std::isfinite(choice.truth_score) || ts.data()[i] < choice.truth_score;
+  choice.truth_percentile = all ? double(better) / double(all) : kNaN;
+  return choice;
+}
+
+nlohmann::ordered_json toJson(const FootfallChoice& c) {
+  nlohmann::ordered_json j;
+  j["method"] = c.method;
+  j["x_m"] = jsonNumber(c.x_m);
+  j["y_m"] = jsonNumber(c.y_m);
+  j["score"] = jsonNumber(c.score);
+  j["truth_score"] = jsonNumber(c.truth_score);
+  j["truth_percentile"] = jsonNumber(c.truth_percentile);
+  return j;
+}
+
+}  // namespace ambler::eval

@@ -1,0 +1,29 @@
+#pragma once
+// A footfall method's choice scored against the truth (docs/footfall.md): where it put the foot,
+// its own score there, the true surface's score there by the same method, and its true
+// percentile, the share of the true candidates the truth scores better (0: the truth's best; a
+// cell the truth rejects is worse than every true candidate: 1).
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "perception/footfall.hpp"
+#include "perception/map_grid.hpp"
+
+namespace ambler::eval {
+
+struct FootfallChoice {
+  std::string method;
+  double x_m, y_m;  // the chosen foot centre (NaN: no candidate)
+  double score, truth_score, truth_percentile;
+};
+
+// `scores` is the method's evaluation of the rover's map and `truth` the same method's of the
+// true surface, both on `grid`.
+FootfallChoice scoreChoice(const std::string& method, const perception::FootfallScores& scores,
+                           const perception::FootfallScores& truth, const perception::MapGrid& grid);
+
+// footfall/METHOD.json and metrics.footfall[k]: method, x_m, y_m, score, truth_score,
+// truth_percentile (NaN → null).
+nlohmann::ordered_json toJson(const FootfallChoice& c);
+
+}  // namespace ambler::eval

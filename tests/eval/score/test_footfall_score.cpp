@@ -1,0 +1,62 @@
+// eval/score/footfall_score: a choice scored against a hand-made true score raster, where the true
+// percentile is counted by hand.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "eval/score/footfall_score.hpp"
+
+namespace ambler::eval {
+namespace {
+
+constexpr float kNaNf = std::numeric_limits<float>::quiet_NaN();
+
+// A 1 × 5 grid of 0.5 m cells from x = 10 m, its row's top at y = 2 m: cell c's centre is
+// (10.25 + 0.5·c, 1.75).
+perception::MapGrid grid() {
+  perception::MapGrid g;
+  g.x_min = 10, g.y_max = 2, g.cell = 0.5, g.rows = 1, g.cols = 5;
+  return g;
+}
+
+perception::FootfallScores scores(std::initializer_list<float> values, std::optional<int> best_col) {
+  perception::FootfallScores s;
+  s.score = perception::Raster<float>(1, 5);
+  int c = 0;
+  for (const float v : values) s.score(0, c++) = v;
+  if (best_col) s.best = Eigen::Vector2i(0, *best_col), s.best_score = s.score(0, *best_col);
+  return s;
+}
+
+TEST(FootfallScore, TruePercentileIsTheShareOfTrueCandidatesScoredBetter) {
+  // The truth scores four candidates (one it rejects: NaN); the rover chose column 3, whose true
+  // score 0.4 three of the four beat: 3/4.
+  const auto truth = scores({0.1f, 0.2f, kNaNf, 0.4f, 0.3f}, std::nullopt);
+  const FootfallChoice c = scoreChoice("planar_fit", scores({5, 4, 3, 1, 2}, 3), truth, grid());
+  EXPECT_EQ(c.method, "planar_fit");
+  EXPECT_DOUBLE_EQ(c.x_m, 11.75);
+  EXPECT_DOUBLE_EQ(c.y_m, 1.75);
+  EXPECT_DOUBLE_EQ(c.score, 1.0);
+  EXPECT_DOUBLE_EQ(c.truth_score, 0.4f);
+  EXPECT_DOUBLE_EQ(c.truth_percentile, 0.75);
+  // The truth's own best: 0.
+  EXPECT_DOUBLE_EQ(scoreChoice("m", scores({0, 9, 9, 9, 9}, 0), truth, grid()).truth_percentile, 0.0);
+  // A cell the truth rejects is worse than every true candidate: 4/4.
+  const FootfallChoice rejected = scoreChoice("m", scores({9, 9, 0, 9, 9}, 2), truth, grid());
+  EXPECT_TRUE(std::isnan(rejected.truth_score));
+  EXPECT_DOUBLE_EQ(rejected.truth_percentile, 1.0);
+}
+
+TEST(FootfallScore, NoCandidateIsAllNaNAndNullInJson) {
+  const auto none = scores({kNaNf, kNaNf, kNaNf, kNaNf, kNaNf}, std::nullopt);
+  perception::FootfallScores s = none;
+  s.best_score = std::numeric_limits<double>::quiet_NaN();
+  const FootfallChoice c = scoreChoice("m", s, none, grid());
+  EXPECT_TRUE(std::isnan(c.x_m) && std::isnan(c.y_m) && std::isnan(c.truth_percentile));
+  const nlohmann::ordered_json j = toJson(c);
+  EXPECT_EQ(j.dump(), R"({"method":"m","x_m":null,"y_m":null,"score":null,"truth_score":null,"truth_percentile":null})");
+}
+
+}  // namespace
+}  // namespace ambler::eval
