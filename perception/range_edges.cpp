@@ -323,7 +323,7 @@ void requireConfig(bool ok, const char* what) {
 
 }  // namespace
 
-RangeLinks detectBrokenLinks(const RangeImage& image, const GncConfig& config) {
+RangeLinks detectBrokenLinks(const RangeImage& image, const SensorModel& sensor, const GncConfig& config) {
   requireConfig(config.lambda > 0 && std::isfinite(config.lambda), "lambda must be positive");
   requireConfig(config.h0 > 0 && std::isfinite(config.h0), "h0 must be positive");
   requireConfig(config.surface_sigma_m >= 0 && std::isfinite(config.surface_sigma_m),
@@ -332,7 +332,7 @@ RangeLinks detectBrokenLinks(const RangeImage& image, const GncConfig& config) {
   requireConfig(config.bridge_h >= 0 && std::isfinite(config.bridge_h), "bridge_h must be non-negative");
   requireConfig(config.bridge_span >= 1, "bridge_span must be at least 1");
   requireConfig(config.grow_h >= 0 && std::isfinite(config.grow_h), "grow_h must be non-negative");
-  requireConfig(config.sensor.noise_k >= 0 && config.sensor.quantization_m >= 0,
+  requireConfig(sensor.noise_k >= 0 && sensor.quantization_m >= 0,
                 "sensor noise_k and quantization_m must be non-negative");
   const int rows = image.rows(), cols = image.cols();
   RangeLinks links{Raster<std::uint8_t>::Zero(rows, cols), Raster<std::uint8_t>::Zero(rows, cols)};
@@ -355,7 +355,7 @@ RangeLinks detectBrokenLinks(const RangeImage& image, const GncConfig& config) {
   // The membrane's data and links. σ_u (NoiseU) is the noise of u, so the data term is weighted
   // by 1/σ_u² and a link's k is 2/(σ_u,i + σ_u,j).
   Membrane m(rows, cols);
-  const NoiseU noise(config.sensor, config.surface_sigma_m);
+  const NoiseU noise(sensor, config.surface_sigma_m);
   for (int k = 0; k < Membrane::kArrays; ++k)
     m.storeRow(Membrane::Array(k), -1, nullptr), m.storeRow(Membrane::Array(k), rows, nullptr);
   forRows(rows, pixels, [&](int r0, int r1) {
@@ -389,8 +389,8 @@ RangeLinks detectBrokenLinks(const RangeImage& image, const GncConfig& config) {
   return links;
 }
 
-Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& config) {
-  const RangeLinks links = detectBrokenLinks(image, config);
+Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const SensorModel& sensor, const GncConfig& config) {
+  const RangeLinks links = detectBrokenLinks(image, sensor, config);
   const int rows = image.rows(), cols = image.cols();
   Raster<std::uint8_t> edges(rows, cols);
   // A pixel is an edge if any of its four links is broken; the broken ones say which way.

@@ -11,8 +11,9 @@
 
 namespace ambler::perception {
 
+// The detector's own parameters; the sensor whose σ_ρ (SensorModel::rangeSigma) sets the
+// membrane's noise is an argument of detectRangeEdges.
 struct GncConfig {
-  SensorModel sensor;  // its σ_ρ (SensorModel::rangeSigma) sets the membrane's noise
   // The weak membrane runs on inverse range u = 1/ρ, in units of its noise σ_u = σ(ρ)/ρ², with
   // each link's local trend removed: E = Σ (f − u)²/σ_u² + Σ g(k·(f_j − f_i − s_ij)), k = 1/σ_u,
   // g the truncated quadratic λ²t² capped at α = λh0²/2 (Blake & Zisserman's notation).
@@ -44,9 +45,10 @@ constexpr bool edgeBreaksAcross(std::uint8_t bits, std::uint8_t direction) {
 
 // The edges of `image`: non-zero where a pixel touches a depth discontinuity (kEdgePixel and its
 // direction bits), else 0. NaN or non-positive pixels carry no data: their links neither smooth
-// nor break, so a valid pixel next to an invalid one is not an edge by itself. Throws
-// std::invalid_argument for a config out of range.
-Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& config = {});
+// nor break, so a valid pixel next to an invalid one is not an edge by itself. `sensor` is the one
+// that took the image (its σ_ρ is the membrane's noise). Throws std::invalid_argument for a config
+// or sensor out of range.
+Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const SensorModel& sensor, const GncConfig& config = {});
 
 // The broken links behind detectRangeEdges: right(r, c) = 1 where the link joining (r, c) and
 // (r, c + 1) is broken, down(r, c) = 1 where the link joining (r, c) and (r + 1, c) is (the last
@@ -54,7 +56,7 @@ Raster<std::uint8_t> detectRangeEdges(const RangeImage& image, const GncConfig& 
 struct RangeLinks {
   Raster<std::uint8_t> right, down;
 };
-RangeLinks detectBrokenLinks(const RangeImage& image, const GncConfig& config = {});
+RangeLinks detectBrokenLinks(const RangeImage& image, const SensorModel& sensor, const GncConfig& config = {});
 
 // Unwraps ranges folded by the ambiguity interval A, in place. The seed is the longest continuous
 // stretch of the lowest row that has one (at least three pixels, each continuous with the linear

@@ -14,11 +14,7 @@ ScanMap scanToMap(const RangeImage& measured, const SensorModel& sensor, const E
   out.image = measured;
   out.image.T_WS = T_WS;
   if (sensor.ambiguity_m > 0) out.unwrapped = unwrapRanges(out.image, sensor);
-  if (config.shadows == ShadowMethod::Gnc) {
-    GncConfig gnc = config.gnc;
-    gnc.sensor = sensor;
-    out.edges = detectRangeEdges(out.image, gnc);
-  }
+  if (config.shadows == ShadowMethod::Gnc) out.edges = detectRangeEdges(out.image, sensor, config.gnc);
   LocusConfig locus = config.locus;
   locus.sensor = sensor;
   const LocusMapper mapper(out.image, out.edges ? &*out.edges : nullptr, locus, grid.T_WM);

@@ -23,7 +23,7 @@ enum class ShadowMethod : std::uint8_t {
 struct ScanToMapConfig {
   ShadowMethod shadows = ShadowMethod::Gnc;
   LocusConfig locus;  // its sensor field is replaced by scanToMap's sensor
-  GncConfig gnc;      // likewise
+  GncConfig gnc;
 };
 
 // One scan's map and what was made on the way.

@@ -197,7 +197,7 @@ TEST(LocusPipeline, LanesGiveTheScalarSearchsBits) {
     MapSpec spec;
     perception::RangeImage image = scan.image;
     perception::unwrapRanges(image, sensor);
-    const perception::Raster<std::uint8_t> edges = perception::detectRangeEdges(image);
+    const perception::Raster<std::uint8_t> edges = perception::detectRangeEdges(image, sensor);
     perception::LocusConfig lanes = spec.scanToMapConfig().locus;
     lanes.footprint_sigma = rpy.x() != 0;  // the composite's σ (its own table along scanlines) in one pose
     perception::LocusConfig scalar = lanes;

@@ -84,7 +84,7 @@ struct CapsScene {
   SensorModel erim;
   ElevationMap map1 = scanToMap(test::capsImage(caps, T1), erim, T1, MapGrid::covering(-3, 3, 1.5, 8, 0.1)).map;
   RangeImage image = test::capsImage(caps, T_WS);
-  Raster<std::uint8_t> edges = detectRangeEdges(image, GncConfig{});
+  Raster<std::uint8_t> edges = detectRangeEdges(image, SensorModel{});
   LocusConfig config;
   // Image 2 at the believed pose `believed` (rendered at the truth T_WS; the mapper keeps a
   // reference to the image, which lives as long as the scene).
@@ -252,7 +252,7 @@ TEST(Verification, TheWeightedTwoStageMethodsFeaturesComeFromThePlainMaps) {
   CapsScene s;
   const Eigen::Isometry3d believed = s.T_WS * Eigen::Translation3d(0.05, -0.03, 0.02);
   const RangeImage image1 = test::capsImage(s.caps, s.T1);
-  const Raster<std::uint8_t> edges1 = detectRangeEdges(image1, GncConfig{});
+  const Raster<std::uint8_t> edges1 = detectRangeEdges(image1, SensorModel{});
   const MapGrid grid = s.map1.grid();
   RegistrationConfig config;
   config.acceptance = wide();

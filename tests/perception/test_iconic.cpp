@@ -108,9 +108,7 @@ TEST(Iconic, DescentAndLevenbergMarquardtRecoverTheTransform) {
   const ElevationMap map1 =
       scanToMap(capsImage(caps, T1), ideal, T1, MapGrid::covering(-3, 3, 1.5, 8, 0.1)).map;
   const RangeImage image2 = capsImage(caps, sensorPose({0.3, -2.5, 3}, {0, -32 * kDeg, -4 * kDeg}));
-  GncConfig gnc;
-  gnc.sensor = ideal;
-  const Raster<std::uint8_t> edges2 = detectRangeEdges(image2, gnc);
+  const Raster<std::uint8_t> edges2 = detectRangeEdges(image2, ideal);
   const Eigen::Isometry3d T_WM2 = mapFrame({0.2, -0.1, 0.05}, 3 * kDeg);
   LocusConfig config;
   config.sensor = ideal;
@@ -281,11 +279,6 @@ namespace {
 
 // The recovery test's pair (GNC edges in image 2, map 2's frame moved by T_WM2) and its start, 0.14 m
 // and 1.8° off the truth.
-GncConfig gncFor(const SensorModel& sensor) {
-  GncConfig gnc;
-  gnc.sensor = sensor;
-  return gnc;
-}
 LocusConfig locusFor(const SensorModel& sensor) {
   LocusConfig config;
   config.sensor = sensor;
@@ -293,7 +286,7 @@ LocusConfig locusFor(const SensorModel& sensor) {
 }
 struct CapsRecovery {
   CapsPair pair;
-  Raster<std::uint8_t> edges2 = detectRangeEdges(pair.image2, gncFor(pair.ideal));
+  Raster<std::uint8_t> edges2 = detectRangeEdges(pair.image2, pair.ideal);
   Eigen::Isometry3d T_WM2 = mapFrame({0.2, -0.1, 0.05}, 3 * kDeg);
   LocusMapper mapper{pair.image2, &edges2, locusFor(pair.ideal), T_WM2};
   PoseVector truth = vectorFromPose(T_WM2.inverse());

@@ -21,6 +21,9 @@ namespace ambler::perception {
 namespace {
 
 using Eigen::Vector3d;
+
+// The sensor whose σ_ρ the membrane weighs the scenes by: the ERIM's model.
+const SensorModel kErim;
 constexpr double kDeg = std::numbers::pi / 180.0;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
@@ -243,7 +246,7 @@ TEST(RangeEdges, PlaneWithoutNoiseHasNoEdges) {
   for (const PlaneCase& pc : planeCases()) {
     const Rendered s = renderPlane(pc);
     pixels += s.image.validCount();
-    EXPECT_EQ((detectRangeEdges(s.image).array() != 0).cast<int>().sum(), 0) << pc.name;
+    EXPECT_EQ((detectRangeEdges(s.image, kErim).array() != 0).cast<int>().sum(), 0) << pc.name;
   }
   EXPECT_GT(pixels, 400000);  // the sweep saw the planes, not the sky
 }
@@ -254,7 +257,7 @@ TEST(RangeEdges, PlaneFalseEdgesWithNoiseBelowBound) {
   for (const PlaneCase& pc : planeCases()) {
     Rendered s = renderPlane(pc);
     addNoise(s.image, seed++);
-    const long d = (detectRangeEdges(s.image).array() != 0).cast<long>().sum();
+    const long d = (detectRangeEdges(s.image, kErim).array() != 0).cast<long>().sum();
     if (s.image.validCount() > 2000) {  // a fraction of fewer pixels says little
       EXPECT_LT(double(d) / s.image.validCount(), kNoiseFalseEdgeBound) << pc.name;
     }
@@ -288,7 +291,7 @@ TEST_P(LedgeDrop, EdgeLiesOnTheAnalyticOcclusion) {
         if (s.surface(r, c) == 1 && s.surface(r + 1, c) == 0)
           s.image.range(r, c) = 0.5f * (s.image.range(r, c) + s.image.range(r + 1, c));
   if (lc.noise) addNoise(s.image, 7 + std::uint64_t(lc.y0));
-  const perception::Raster<std::uint8_t> edges = detectRangeEdges(s.image);
+  const perception::Raster<std::uint8_t> edges = detectRangeEdges(s.image, kErim);
   const perception::Raster<std::uint8_t> truth = analyticEdges(s, [&](const Link& l) {
     return s.surface(l.r0, l.c0) + s.surface(l.r1, l.c1) == 1;  // near plane next to far plane
   });
@@ -344,7 +347,7 @@ TEST(RangeEdges, StepUpFacingTheSensorIsNoEdge) {
       View v;
       Rendered s = render(ledgeScene(y0, 0.0, 0.4), v);
       if (noise) addNoise(s.image, 100 + std::uint64_t(y0));
-      const long d = (detectRangeEdges(s.image).array() != 0).cast<long>().sum();
+      const long d = (detectRangeEdges(s.image, kErim).array() != 0).cast<long>().sum();
       EXPECT_LT(double(d) / s.image.validCount(), noise ? kNoiseFalseEdgeBound : 1e-12)
           << "y0 " << y0 << (noise ? " noisy" : "");
     }
@@ -379,7 +382,7 @@ TEST(RangeEdges, BoxRockSilhouette) {
       View v;
       Rendered s = render(scene, v);
       if (noise) addNoise(s.image, 200 + std::uint64_t(y));
-      const perception::Raster<std::uint8_t> edges = detectRangeEdges(s.image);
+      const perception::Raster<std::uint8_t> edges = detectRangeEdges(s.image, kErim);
       auto mixed = [&](const Link& l) { return s.surface(l.r0, l.c0) != s.surface(l.r1, l.c1); };
       const perception::Raster<std::uint8_t> truth = analyticEdges(
           s, [&](const Link& l) { return mixed(l) && silhouette(s, scene, l).occluding; });
@@ -411,7 +414,7 @@ TEST(RangeEdges, InvalidPixelsMakeNoEdges) {
         if (u.uniform() < 0.1 || (r > 20 && r < 30 && c > 100 && c < 140))
           s.image.range(r, c) = kNaN;
     if (noise) addNoise(s.image, 301);
-    const long d = (detectRangeEdges(s.image).array() != 0).cast<long>().sum();
+    const long d = (detectRangeEdges(s.image, kErim).array() != 0).cast<long>().sum();
     EXPECT_LT(double(d) / s.image.validCount(), noise ? kNoiseFalseEdgeBound : 1e-12);
   }
   Rendered s = render(ledgeScene(9, 0.0, -0.4), View{});
@@ -419,7 +422,7 @@ TEST(RangeEdges, InvalidPixelsMakeNoEdges) {
   for (int r = 0; r < s.image.rows(); ++r)
     for (int c = 0; c < s.image.cols(); ++c)
       if (u.uniform() < 0.1 || c < 20) s.image.range(r, c) = kNaN, s.surface(r, c) = -1;
-  const perception::Raster<std::uint8_t> edges = detectRangeEdges(s.image);
+  const perception::Raster<std::uint8_t> edges = detectRangeEdges(s.image, kErim);
   const perception::Raster<std::uint8_t> truth = analyticEdges(s, [&](const Link& l) {
     return s.surface(l.r0, l.c0) + s.surface(l.r1, l.c1) == 1;
   });
@@ -465,10 +468,10 @@ TEST(RangeEdges, EdgeContinuesAlongItsLine) {
     }
   }
   const int line = r0 - 1;  // the down links (r0 − 1, c) cross the step
-  const RangeLinks links = detectBrokenLinks(s.image);
+  const RangeLinks links = detectBrokenLinks(s.image, kErim);
   GncConfig off;
   off.bridge_h = 0, off.grow_h = 0;
-  const RangeLinks membrane = detectBrokenLinks(s.image, off);
+  const RangeLinks membrane = detectBrokenLinks(s.image, kErim, off);
   for (int c = 0; c < cols; ++c) {
     EXPECT_EQ(membrane.down(line, c), excess[c] > 6) << "column " << c << ", rules off";
     EXPECT_EQ(links.down(line, c), excess[c] > 6 || grown_or_bridged[c]) << "column " << c;
@@ -490,13 +493,15 @@ TEST(RangeEdges, RejectsBadConfig) {
       [](GncConfig& c) { c.bridge_h = -1; },
       [](GncConfig& c) { c.bridge_span = 0; },
       [](GncConfig& c) { c.grow_h = std::numeric_limits<double>::quiet_NaN(); },
-      [](GncConfig& c) { c.sensor.noise_k = -1; },
   };
   for (std::size_t i = 0; i < breakers.size(); ++i) {
     GncConfig bad;
     breakers[i](bad);
-    EXPECT_THROW(detectRangeEdges(image, bad), std::invalid_argument) << "case " << i;
+    EXPECT_THROW(detectRangeEdges(image, kErim, bad), std::invalid_argument) << "case " << i;
   }
+  SensorModel negative_noise;
+  negative_noise.noise_k = -1;
+  EXPECT_THROW(detectRangeEdges(image, negative_noise), std::invalid_argument);
   RangeImage copy = image;
   EXPECT_THROW(unwrapRanges(copy, interval(0.0)), std::invalid_argument);
 }

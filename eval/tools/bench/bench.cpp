@@ -233,8 +233,6 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   const perception::ScanMap base = perception::scanToMap(scan.image, sensor, T, region.grid());
   const perception::RangeImage& image = base.image;
   const perception::Raster<std::uint8_t>& edges = *base.edges;
-  perception::GncConfig gnc;
-  gnc.sensor = sensor;
   perception::LocusConfig locus;
   locus.sensor = sensor;
   locus.epsilon_rad = region.epsilon_rad;
@@ -276,7 +274,7 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   double setup_s = 0, edges_s = 0;
   {
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-    edges_s = timeMedian(opt.repetitions, [&] { perception::detectRangeEdges(image, gnc); });
+    edges_s = timeMedian(opt.repetitions, [&] { perception::detectRangeEdges(image, sensor); });
     setup_s = timeMedian(opt.repetitions, [&] { perception::LocusMapper(image, &edges, locus); });
   }
   progress.step("edge detection and mapper tables");
