@@ -1,7 +1,10 @@
 #include "perception/composite.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace ambler::perception {
 
@@ -106,6 +109,53 @@ void addSigma(ElevationMap& map, const Raster<float>& extra) {
       const float s = map.sigma()(r, c);
       map.sigma()(r, c) = std::sqrt(s * s + e * e);
     }
+}
+
+namespace {
+
+// The part of each Known cell's σ every view of it shares (docs/composite.md, "What the views
+// share"): σ_rough = √(σ² − σ_noise²), `map` mapped with the terrain's part of σ and `noise` the
+// same scan without it; 0 where either is not Known.
+Raster<float> sharedSigma(const ElevationMap& map, const ElevationMap& noise) {
+  const MapGrid& g = map.grid();
+  Raster<float> shared = Raster<float>::Zero(g.rows, g.cols);
+  for (int r = 0; r < g.rows; ++r)
+    for (int c = 0; c < g.cols; ++c)
+      if (map.stateAt(r, c) == CellState::Known && noise.stateAt(r, c) == CellState::Known) {
+        const float s = map.sigma()(r, c), n = noise.sigma()(r, c);
+        shared(r, c) = std::sqrt(std::max(0.f, s * s - n * n));
+      }
+  return shared;
+}
+
+}  // namespace
+
+ElevationMap buildComposite(const std::vector<const ScanMap*>& views, const std::vector<ViewPlacement>& placements,
+                            const MapGrid& grid, const LocusConfig& config) {
+  if (views.size() != placements.size())
+    throw std::invalid_argument("buildComposite: " + std::to_string(views.size()) + " views but " +
+                                std::to_string(placements.size()) + " placements");
+  LocusConfig locus = config;
+  locus.footprint_sigma = true;  // the footprint's error is shared by every view (docs/composite.md)
+  // σ without the terrain's part (docs/locus.md, σ_rough): what is left is the part every view
+  // of a cell shares (docs/composite.md).
+  LocusConfig noise_only = locus;
+  noise_only.roughness = false;
+  ElevationMap composite(grid);
+  Raster<float> composite_shared = Raster<float>::Zero(grid.rows, grid.cols);
+  for (std::size_t k = 0; k < views.size(); ++k) {
+    const ViewPlacement& placement = placements[k];
+    if (placement.how == PlacementHow::LeftOut) continue;
+    if (!views[k])
+      throw std::invalid_argument("buildComposite: view " + std::to_string(k) + " is placed but has no scan");
+    // The scan as the rover mapped it (unwrapped, its edges), at the composite's pose for it.
+    ElevationMap map = mapAtPose(*views[k], placement.T_WS, grid, locus);
+    const Raster<float> shared = sharedSigma(map, mapAtPose(*views[k], placement.T_WS, grid, noise_only));
+    // Each link's pose covariance, first order and independent: variances add.
+    addSigma(map, placementSigma(map, placement.chain));
+    mergeInto(composite, composite_shared, map, shared);
+  }
+  return composite;
 }
 
 }  // namespace ambler::perception

@@ -6,7 +6,11 @@
 
 #include "perception/elevation_map.hpp"
 #include "perception/iconic.hpp"
+#include "perception/locus_mapper.hpp"
+#include "perception/map_grid.hpp"
+#include "perception/placement.hpp"
 #include "perception/rigid_transform.hpp"
+#include "perception/scan_to_map.hpp"
 
 namespace ambler::perception {
 
@@ -42,5 +46,17 @@ Raster<float> registrationSigma(const ElevationMap& map, const PoseVector& nu, c
 // σ_z of every Known cell of `map` grown by `extra` in quadrature (√(σ² + extra²); NaN extra
 // leaves a cell alone). Throws std::invalid_argument if the sizes differ.
 void addSigma(ElevationMap& map, const Raster<float>& extra);
+
+// The composite of several views on `grid` (docs/composite.md): each placed view's scan (its
+// unwrapped image and edges) mapped by the locus algorithm straight onto the grid at its
+// placement's pose (mapAtPose), with `config` and the footprint's term in σ on (it is shared by
+// every view of a cell: LocusConfig::footprint_sigma); each cell's shared σ, σ_rough (the σ the
+// same scan has without roughness taken away in quadrature); the σ its placement's chain adds
+// (placementSigma, from the links the chain points into, which must still live); and the maps
+// merged in view order by mergeInto with their shared parts. views[k] is view k's scan (null
+// allowed for a view placed LeftOut); a view placed LeftOut contributes nothing. Throws
+// std::invalid_argument when the two lists' sizes differ or a placed view has no scan.
+ElevationMap buildComposite(const std::vector<const ScanMap*>& views, const std::vector<ViewPlacement>& placements,
+                            const MapGrid& grid, const LocusConfig& config);
 
 }  // namespace ambler::perception

@@ -123,6 +123,8 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
   const Eigen::Isometry3d& believed = image_j.T_WS;
   if (method == RegistrationMethod::Features) {
     out.nu = nu0;
+    out.correction = poseFromVector(out.nu).inverse();
+    out.corrected_WS = out.correction * believed;
     out.assessment = assessRegistration(map_i, mapper, out.nu, believed, nullptr, nullptr, config.acceptance);
     return out;
   }
@@ -161,6 +163,8 @@ RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& im
     out.iconic = std::move(v.result);
   }
   out.nu = out.iconic.nu;
+  out.correction = poseFromVector(out.nu).inverse();
+  out.corrected_WS = out.correction * believed;
   out.iterations = out.iconic.iterations;
   const Degeneracy d{out.iconic.degenerate, out.iconic.free_directions};
   out.assessment =

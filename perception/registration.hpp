@@ -3,6 +3,7 @@
 // feature matching alone, the paper's iconic descent (from T_0, or from feature matching's T_F),
 // Levenberg–Marquardt, and its uncertainty-weighted form. What the match stage, `ambler bench
 // match` and the experiments call. Onboard code: image J carries the pose the rover believes.
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -75,6 +76,10 @@ struct RegistrationHypothesis {
 
 struct RegistrationResult {
   PoseVector nu = PoseVector::Zero();  // map I's frame → the believed frame of image J
+  // The correction as a motion of map I's frame (the world), exp(ν)⁻¹: the one place ν becomes a
+  // pose. It moves sensor J from where the rover believed it to corrected_WS = correction·believed.
+  Eigen::Isometry3d correction = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d corrected_WS = Eigen::Isometry3d::Identity();
   int iterations = 0;                  // iconic iterations (0 for features alone)
   IconicResult iconic;                 // the iconic stage's result (iterations, trace, covariance), if it ran
   bool ran_iconic = false;
@@ -130,15 +135,16 @@ MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, con
 // two-stage method refines T_F, T_0 and feature matching's next-best distinct pairings
 // (FeatureMatch::ranked) by its iconic method and keeps the refinement of lowest robust iconic
 // cost over the lines all of them have: it never returns what its own cost rates worse than
-// refining T_0. Every result carries the rover's verdict (assessRegistration, config.acceptance). The
-// estimate ν maps map I's frame to the frame image J's believed pose lives in; the corrected pose
-// of sensor J is poseFromVector(ν)⁻¹·believed. Feature matching builds map J on grid_j (in the
-// believed world; see believedGrid). Map I must be in the world frame (its grid's T_WM the
-// identity). map_i_source, if given, is the locus mapper map I was made with (image I and its
-// edges): the weighted method's covariance then counts the pixels map I's lines share
-// (IconicOptions::map1_source). feature_map_i, if given, is the map I feature matching reads
-// (made with config.feature_locus; the same grid as map_i), else map_i. Throws
-// std::invalid_argument when map I is not in the world frame or the two maps' grids differ.
+// refining T_0. Every result carries the rover's verdict (assessRegistration, config.acceptance).
+// The estimate ν maps map I's frame to the frame image J's believed pose lives in; the corrected
+// pose of sensor J is corrected_WS = correction·believed, correction = poseFromVector(ν)⁻¹.
+// Feature matching builds map J on grid_j (in the believed world; see believedGrid). Map I must
+// be in the world frame (its grid's T_WM the identity). map_i_source, if given, is the locus
+// mapper map I was made with (image I and its edges): the weighted method's covariance then
+// counts the pixels map I's lines share (IconicOptions::map1_source). feature_map_i, if given, is
+// the map I feature matching reads (made with config.feature_locus; the same grid as map_i), else
+// map_i. Throws std::invalid_argument when map I is not in the world frame or the two maps' grids
+// differ.
 RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& image_j,
                                  const Raster<std::uint8_t>* edges_j, const MapGrid& grid_j,
                                  RegistrationMethod method, const RegistrationConfig& config,

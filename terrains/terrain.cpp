@@ -141,4 +141,23 @@ Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed, const HeightMat
   return compose(spec, seed, &base);
 }
 
+std::optional<double> surfaceAt(const Terrain& terrain, double x, double y) {
+  std::optional<double> top = terrain.ground.height(x, y);
+  if (!top) return std::nullopt;
+  for (const Rock& rock : terrain.rocks) {
+    for (const Eigen::Vector3i& f : rock.faces) {
+      const Eigen::Vector3d a = rock.center + rock.vertices[f[0]], b = rock.center + rock.vertices[f[1]],
+                            c = rock.center + rock.vertices[f[2]];
+      // (x, y)'s barycentric coordinates in the face's plan-view triangle; d is twice its signed area.
+      const double d = (b.y() - c.y()) * (a.x() - c.x()) + (c.x() - b.x()) * (a.y() - c.y());
+      if (std::abs(d) < 1e-15) continue;  // a vertical face
+      const double la = ((b.y() - c.y()) * (x - c.x()) + (c.x() - b.x()) * (y - c.y())) / d;
+      const double lb = ((c.y() - a.y()) * (x - c.x()) + (a.x() - c.x()) * (y - c.y())) / d;
+      const double lc = 1.0 - la - lb;
+      if (la >= 0 && lb >= 0 && lc >= 0) top = std::max(*top, la * a.z() + lb * b.z() + lc * c.z());
+    }
+  }
+  return top;
+}
+
 }  // namespace ambler::terrains

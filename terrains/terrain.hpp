@@ -90,4 +90,9 @@ Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed);
 // a base of the wrong shape or a non-finite height.
 Terrain makeTerrain(const TerrainSpec& spec, std::uint64_t seed, const HeightMatrix& base);
 
+// The top of a terrain at (x, y): the ground (its triangulated heightfield), or the highest rock face
+// above it (each face's plane over the triangle it covers in plan view; vertical faces have none):
+// the surface a ray cast straight down meets. nullopt outside the heightfield.
+std::optional<double> surfaceAt(const Terrain& terrain, double x, double y);
+
 }  // namespace ambler::terrains

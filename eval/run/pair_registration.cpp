@@ -53,6 +53,13 @@ peers::PeerMethod peerMethod(MatchMethod m) {
 
 }  // namespace
 
+Eigen::Isometry3d PairRegistration::relativeEstimate(const perception::RegistrationResult& reg,
+                                                     const Eigen::Isometry3d& believed_WS) const {
+  // T_WS,I⁻¹·corrected_WS, multiplied as (T_WS,I⁻¹·correction)·believed: the same pose, rounded
+  // as the run's outputs are (a product of isometries rounds differently in another order).
+  return T_WS_i_.inverse() * reg.correction * believed_WS;
+}
+
 PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_0) const {
   PairResult out;
   out.believed_WS = T_WS_i_ * T_0;
@@ -70,7 +77,9 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
     out.seconds = t.seconds();
     out.reg.nu = perception::vectorFromPose(r.T.inverse());
     out.reg.iterations = r.iterations;
-    out.T_est = T_WS_i_.inverse() * r.T * out.believed_WS;
+    out.reg.correction = r.T;
+    out.reg.corrected_WS = r.T * out.believed_WS;
+    out.T_est = relativeEstimate(out.reg, out.believed_WS);
     out.error = perception::poseError(T_IJ_, out.T_est);
     // The rover's verdict on the peer's estimate, by the same tests as the paper's methods'.
     const perception::LocusMapper mapper(image, j_.edges ? &*j_.edges : nullptr, config_.locus);
@@ -90,7 +99,7 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
                                       grid_j, *paper, config, source_i_ ? &*source_i_ : nullptr,
                                       weighted ? &map_i_ : nullptr);
   out.seconds = t.seconds();
-  out.T_est = T_WS_i_.inverse() * perception::poseFromVector(out.reg.nu).inverse() * out.believed_WS;
+  out.T_est = relativeEstimate(out.reg, out.believed_WS);
   out.error = perception::poseError(T_IJ_, out.T_est);
   return out;
 }

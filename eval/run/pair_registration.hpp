@@ -18,9 +18,10 @@ namespace ambler::eval {
 struct PairResult {
   Eigen::Isometry3d believed_WS = Eigen::Isometry3d::Identity();  // sensor J where the rover believes it
   Eigen::Isometry3d T_est = Eigen::Isometry3d::Identity();        // sensor J in sensor I's frame, estimated
-  // ν (world → the believed world of J) and, for the paper's methods, everything registerViews
-  // returns (the iconic trace and covariance, feature matching's products). A peer fills nu and
-  // iterations alone.
+  // ν (world → the believed world of J), the corrected pose of sensor J and, for the paper's
+  // methods, everything registerViews returns (the iconic trace and covariance, feature
+  // matching's products). A peer fills nu, correction, corrected_WS, iterations and the assessment
+  // alone.
   perception::RegistrationResult reg;
   perception::PoseError error, start;  // of T_est and of T_0 against the truth
   double seconds = 0;                  // wall time of the registration alone
@@ -47,6 +48,10 @@ class PairRegistration {
   PairResult run(MatchMethod method, const Eigen::Isometry3d& T_0) const;
 
  private:
+  // Sensor J in sensor I's frame by a registration's corrected pose.
+  Eigen::Isometry3d relativeEstimate(const perception::RegistrationResult& reg,
+                                     const Eigen::Isometry3d& believed_WS) const;
+
   const perception::ScanMap& i_;
   const perception::ScanMap& j_;
   Eigen::Isometry3d T_WS_i_, T_IJ_;

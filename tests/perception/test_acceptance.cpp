@@ -283,6 +283,9 @@ TEST(Verification, TheWeightedTwoStageMethodsFeaturesComeFromThePlainMaps) {
   const PoseError e = poseError(poseFromVector(s.correction(believed)), poseFromVector(r.nu));
   EXPECT_LT(e.translation_m, 5e-3);
   EXPECT_TRUE(r.assessment.accepted) << (r.assessment.reject_reasons.empty() ? "" : r.assessment.reject_reasons.front());
+  // The corrected pose of sensor J is ν's one conversion, exp(ν)⁻¹·believed, bit for bit.
+  EXPECT_TRUE(r.correction.matrix() == poseFromVector(r.nu).inverse().matrix());
+  EXPECT_TRUE(r.corrected_WS.matrix() == (poseFromVector(r.nu).inverse() * believed).matrix());
   const ElevationMap other(MapGrid::covering(-2, 2, 0, 4, 0.1));
   EXPECT_THROW(registerViews(weighted, image2, &s.edges, grid_j, RegistrationMethod::FeaturesIconicWeighted, config,
                              nullptr, &other),

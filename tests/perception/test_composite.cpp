@@ -1,13 +1,19 @@
 // Composite maps (paper §4.3): eq. 9 and its σ on two maps of a plane against the closed form,
 // the state rules cell by cell, a map merged with itself halving the variance; the σ a pose's
 // covariance adds to a tilted plane against its closed form (ν = 0) and against finite
-// differences of the moved plane (ν ≠ 0).
+// differences of the moved plane (ν ≠ 0); buildComposite on two scans of a plane: eq. 9 of the
+// single views' composites, the shared σ_rough counted once for a view merged with itself, a
+// placement's σ added in quadrature, a left-out view contributing nothing.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
 
 #include "perception/composite.hpp"
+#include "perception/placement.hpp"
+#include "perception/scan_to_map.hpp"
+#include "perception/sensor_geometry.hpp"
+#include "synthetic.hpp"
 
 namespace ambler::perception {
 namespace {
@@ -186,6 +192,176 @@ TEST(Composite, AddSigmaIsInQuadrature) {
   EXPECT_NEAR(m.sigma()(1, 1), 0.05, 1e-7);
   EXPECT_FLOAT_EQ(m.sigma()(0, 0), 0.03f);
   EXPECT_THROW(addSigma(m, Raster<float>::Zero(2, 2)), std::invalid_argument);
+}
+
+// ---- buildComposite on scans of a plane.
+
+constexpr double kU = 0x1p-24;  // unit round-off of float32: the maps' stored elevations and σ
+
+const test::Plane kPlane{0.05, -0.03, 0.1};
+
+// Range noise k·ρ² with k = 2e-5 (σ_ρ ≈ 1 mm at 7 m) so that σ's noise part and its roughness
+// part (about 1 mm here) are of one size; no quantisation or wrap (the synthetic image is exact
+// and unfolded); mixed pixels on, so the footprint's term is part of σ_rough where the composite
+// asks for it.
+SensorModel planeSensor() {
+  SensorModel s;
+  s.noise_k = 2e-5;
+  s.quantization_m = 0;
+  s.ambiguity_m = 0;
+  return s;
+}
+
+// The composite's grid, 10 m × 4 m at 10 cm, 5–11 m in front of both sensors, which stand 3 m up:
+// each sees a few hundred cells at the sides that the other does not.
+MapGrid compositeGrid() { return MapGrid::covering(-5, 5, -1, 3, 0.1); }
+const Eigen::Isometry3d kS1 = sensorPose({-0.5, -6, 3}, Eigen::Vector3d(0, -25, 5) * kDeg);
+const Eigen::Isometry3d kS2 = sensorPose({1.0, -5, 3.2}, Eigen::Vector3d(0, -28, -10) * kDeg);
+
+// The plane's exact image from T_WS, as the rover maps it (no edges: a plane has none).
+ScanMap planeScan(const Eigen::Isometry3d& T_WS) {
+  ScanToMapConfig c;
+  c.shadows = ShadowMethod::None;
+  return scanToMap(test::planeImage(kPlane, T_WS), planeSensor(), T_WS, compositeGrid(), c);
+}
+
+LocusConfig compositeLocus(bool roughness) {
+  LocusConfig c;
+  c.sensor = planeSensor();
+  c.roughness = roughness;
+  return c;
+}
+
+ViewPlacement at(const Eigen::Isometry3d& T_WS, PlacementHow how = PlacementHow::True) { return {how, T_WS, {}}; }
+// Left out, though its pose is one the view maps well from: the pose must not be used.
+ViewPlacement leftOut(const Eigen::Isometry3d& T_WS) { return {PlacementHow::LeftOut, T_WS, {}}; }
+
+bool sameBits(const ElevationMap& a, const ElevationMap& b) {
+  const auto same = [](const Raster<float>& x, const Raster<float>& y) {
+    return x.rows() == y.rows() && x.cols() == y.cols() &&
+           ((x.array() == y.array()) || (x.array().isNaN() && y.array().isNaN())).all();
+  };
+  for (int r = 0; r < a.grid().rows; ++r)
+    for (int c = 0; c < a.grid().cols; ++c)
+      if (a.stateAt(r, c) != b.stateAt(r, c)) return false;
+  return same(a.elevation(), b.elevation()) && same(a.sigma(), b.sigma()) && same(a.shadowCeiling(), b.shadowCeiling());
+}
+
+// With σ's roughness part off nothing is shared (σ_rough = 0), so two views merge by eq. 9 itself:
+// each cell both know is (σ₂²·z₁ + σ₁²·z₂)/(σ₁² + σ₂²) with σ² = σ₁²σ₂²/(σ₁² + σ₂²), z_k and σ_k
+// the single views' composites (each with the other view left out); a cell one knows is that one's.
+// Both stored as float from a double computation of the same float inputs: within half an ulp,
+// u·|value| (u = 2⁻²⁴), and the double's own rounding (≈ 1e-16 relative) below that; 2u. The
+// elevation is the plane's within 2 mm (bilinear interpolation of ρ between pixels at ≥ 10° of
+// grazing and ρ ≤ 15 m, test_scan_to_map.cpp; here ρ ≤ 11 m and the beams meet the plane at
+// ≥ 14°), as a weighted mean of two such values.
+TEST(Composite, BuildCompositeMergesTwoScansOfAPlaneByEquationNine) {
+  const ScanMap v1 = planeScan(kS1), v2 = planeScan(kS2);
+  const MapGrid grid = compositeGrid();
+  const LocusConfig locus = compositeLocus(false);
+  const ElevationMap c1 = buildComposite({&v1, &v2}, {at(kS1, PlacementHow::Reference), leftOut(kS2)}, grid, locus);
+  const ElevationMap c2 = buildComposite({nullptr, &v2}, {leftOut(kS1), at(kS2)}, grid, locus);
+  const ElevationMap both = buildComposite({&v1, &v2}, {at(kS1, PlacementHow::Reference), at(kS2)}, grid, locus);
+  // A left-out view contributes nothing: the composite is view 1's alone, bit for bit.
+  EXPECT_TRUE(sameBits(c1, buildComposite({&v1}, {at(kS1, PlacementHow::Reference)}, grid, locus)));
+  int merged = 0, single = 0;
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      const bool k1 = c1.stateAt(r, c) == CellState::Known, k2 = c2.stateAt(r, c) == CellState::Known;
+      ASSERT_EQ(both.stateAt(r, c), k1 || k2 ? CellState::Known : CellState::Unseen) << r << " " << c;
+      if (k1 != k2) {
+        const ElevationMap& one = k1 ? c1 : c2;
+        EXPECT_EQ(both.elevation()(r, c), one.elevation()(r, c));
+        EXPECT_EQ(both.sigma()(r, c), one.sigma()(r, c));
+        ++single;
+      }
+      if (!k1 || !k2) continue;
+      ++merged;
+      const double z1 = c1.elevation()(r, c), z2 = c2.elevation()(r, c);
+      const double v1s = double(c1.sigma()(r, c)) * c1.sigma()(r, c), v2s = double(c2.sigma()(r, c)) * c2.sigma()(r, c);
+      const double z = (v2s * z1 + v1s * z2) / (v1s + v2s), sigma = std::sqrt(v1s * v2s / (v1s + v2s));
+      EXPECT_NEAR(both.elevation()(r, c), z, 2 * kU * std::abs(z)) << r << " " << c;
+      EXPECT_NEAR(both.sigma()(r, c), sigma, 2 * kU * sigma) << r << " " << c;
+      const Eigen::Vector2d p = grid.center(r, c);
+      EXPECT_NEAR(both.elevation()(r, c), kPlane.z(p.x(), p.y()), 2e-3) << r << " " << c;
+    }
+  // Both views cover most of the grid, each some cells the other misses.
+  EXPECT_GT(merged, grid.rows * grid.cols / 2);
+  EXPECT_GT(single, 0);
+}
+
+// σ_rough (the terrain's part, the footprint's term in it: LocusConfig::footprint_sigma, which the
+// composite turns on) is shared by every view of a cell, the rest independent (docs/composite.md,
+// "What the views share"). The same scan placed twice at the same pose merges with w = ½ each:
+// z its own, σ_s = s, σ² = ¼(σ² − s²)·2 + s² = σ² − σ_n²/2 with s² = σ² − σ_n² (σ the single
+// composite's, σ_n the same without roughness): eq. 9's σ²/2 for the independent part only.
+// Float rounding: σ, σ_n stored (u relative each), s² formed in float from them (cancellation
+// leaves an absolute error ≲ 2u·σ²), σ² halved and stored: |Δσ| ≲ (2u·σ²)/(2σ_m) + u·σ_m ≤ 3u·σ
+// (σ_m ≥ σ/√2); 4u·σ.
+TEST(Composite, BuildCompositeCountsTheSharedRoughnessOnce) {
+  const ScanMap v1 = planeScan(kS1);
+  const MapGrid grid = compositeGrid();
+  const LocusConfig rough = compositeLocus(true);
+  const ElevationMap single = buildComposite({&v1}, {at(kS1, PlacementHow::Reference)}, grid, rough);
+  const ElevationMap noise = buildComposite({&v1}, {at(kS1, PlacementHow::Reference)}, grid, compositeLocus(false));
+  const ElevationMap twice = buildComposite({&v1, &v1}, {at(kS1, PlacementHow::Reference), at(kS1)}, grid, rough);
+  // The footprint's term is the composite's whatever the caller's config says (`rough` has it off).
+  ASSERT_FALSE(rough.footprint_sigma);
+  LocusConfig with_footprint = rough;
+  with_footprint.footprint_sigma = true;
+  EXPECT_TRUE(sameBits(single, buildComposite({&v1}, {at(kS1, PlacementHow::Reference)}, grid, with_footprint)));
+  int known = 0, shared_counts = 0;
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      if (single.stateAt(r, c) != CellState::Known) continue;
+      ASSERT_EQ(noise.stateAt(r, c), CellState::Known);
+      ASSERT_EQ(twice.stateAt(r, c), CellState::Known);
+      ++known;
+      const double s = single.sigma()(r, c), n = noise.sigma()(r, c);
+      const double expected = std::sqrt(s * s - 0.5 * n * n);
+      EXPECT_EQ(twice.elevation()(r, c), single.elevation()(r, c));
+      EXPECT_NEAR(twice.sigma()(r, c), expected, 4 * kU * s) << r << " " << c;
+      // Where the shared part is not negligible, eq. 9's independent σ/√2 is well off.
+      shared_counts += std::abs(expected - s / std::sqrt(2.0)) > 0.05 * expected;
+    }
+  EXPECT_GT(known, grid.rows * grid.cols / 2);
+  EXPECT_GT(shared_counts, known / 2) << "σ_rough should be a material part of σ on most cells";
+}
+
+// A view placed through a link with a covariance: its cells' σ grow by the placement's σ in
+// quadrature, σ² = σ_map² + placementSigma², the map and its σ_map being the same view's at the
+// same pose placed with no covariance (its composite alone). √(σ² + e²) in float from stored
+// floats: within ≈ 2u·σ.
+TEST(Composite, BuildCompositeAddsThePlacementsSigmaInQuadrature) {
+  const ScanMap v1 = planeScan(kS1), v2 = planeScan(kS2);
+  const MapGrid grid = compositeGrid();
+  const LocusConfig locus = compositeLocus(true);
+  // Link (0, 1) registered from view 0 at kS1, view 1 believed 0.2 m off and corrected to kS2.
+  const Eigen::Isometry3d believed = Eigen::Translation3d(0.2, -0.1, 0) * kS2;
+  PlacementLink l;
+  l.i = 0, l.j = 1, l.T_WS_i = kS1, l.believed_WS_j = believed, l.nu = vectorFromPose(believed * kS2.inverse());
+  PoseVector sd;  // σ of ν: a milliradian or two, a centimetre
+  sd << 1e-3, 1e-3, 2e-3, 0.01, 0.01, 0.005;
+  l.covariance = Matrix6d(sd.cwiseAbs2().asDiagonal());
+  const std::vector<PlacementLink> links{l};
+  const std::vector<ViewPlacement> p = placeViews(2, 0, kS1, links);
+  ASSERT_EQ(p[1].how, PlacementHow::Matched);
+  const ElevationMap placed = buildComposite({nullptr, &v2}, {leftOut(kS1), p[1]}, grid, locus);
+  const ElevationMap plain = buildComposite({nullptr, &v2}, {leftOut(kS1), at(p[1].T_WS)}, grid, locus);
+  const Raster<float> extra = placementSigma(plain, p[1].chain);
+  int known = 0;
+  for (int r = 0; r < grid.rows; ++r)
+    for (int c = 0; c < grid.cols; ++c) {
+      if (plain.stateAt(r, c) != CellState::Known) continue;
+      ++known;
+      const double s = plain.sigma()(r, c), e = extra(r, c);
+      ASSERT_GT(e, 1e-3) << "the link's covariance should add millimetres";
+      EXPECT_EQ(placed.elevation()(r, c), plain.elevation()(r, c));
+      EXPECT_NEAR(placed.sigma()(r, c), std::sqrt(s * s + e * e), 2 * kU * std::sqrt(s * s + e * e)) << r << " " << c;
+    }
+  EXPECT_GT(known, grid.rows * grid.cols / 2);
+  EXPECT_THROW(buildComposite({&v1}, {at(kS1), at(kS2)}, grid, locus), std::invalid_argument);  // sizes differ
+  EXPECT_THROW(buildComposite({nullptr}, {at(kS1)}, grid, locus), std::invalid_argument);       // placed, no scan
 }
 
 }  // namespace

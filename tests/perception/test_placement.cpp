@@ -1,8 +1,10 @@
 // The composite's placements (perception/placement.hpp): views chained through accepted links
-// only, forward and reverse poses by their closed form, and the σ a link's covariance adds: the
-// registrationSigma closed form for a forward step from the reference, and a Monte-Carlo of the
-// placement itself for a reverse step in a composite frame other than the registration's (where
-// registrationSigma with the link's ν is wrong: the negative control).
+// only, forward (view 0 → 1 → 2), in reverse (I = P_J·T_IJ⁻¹) and past a rejected link, each
+// against the pose composed by hand from the links and against the true poses when every link's ν
+// is the exact correction; and the σ a link's covariance adds: the registrationSigma closed form
+// for a forward step from the reference, and a Monte-Carlo of the placement itself for a reverse
+// step in a composite frame other than the registration's (where registrationSigma with the
+// link's ν is wrong: the negative control).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -59,6 +61,121 @@ TEST(Placement, ChainsThroughAcceptedLinksAndLeavesTheRestOut) {
   // With view 0 at its registered pose, P_1 is exp(ν)⁻¹·believed (registerViews' convention).
   EXPECT_TRUE(near(p[1].T_WS, poseFromVector(someNu()).inverse() * B1, 1e-12));
   EXPECT_STREQ(placementHowName(p[2].how), "left_out");
+}
+
+// Three views along a traverse: where they are (S_k), where the rover believes views 1 and 2 are
+// (decimetres and degrees off), and two corrections that are not the exact ones (so a link's
+// relative pose is not the truth's and a wrong composition shows).
+struct Traverse {
+  Eigen::Isometry3d S[3] = {sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}),
+                            sensorPose({0.8, -4.5, 3.1}, {0.02, -28 * kDeg, 9 * kDeg}),
+                            sensorPose({1.9, -3.2, 2.9}, {-0.01, -31 * kDeg, 21 * kDeg})};
+  Eigen::Isometry3d B[3] = {
+      S[0], Eigen::Translation3d(0.3, -0.2, 0.05) * S[1] * Eigen::AngleAxisd(4 * kDeg, Eigen::Vector3d::UnitZ()),
+      Eigen::Translation3d(-0.25, 0.35, -0.04) * S[2] * Eigen::AngleAxisd(-6 * kDeg, Eigen::Vector3d::UnitX())};
+  // ν for link (i, j) registered with view I at S_i: exact, exp(ν)⁻¹·B_j = S_j; or that and a
+  // deliberate error.
+  PoseVector exact(int j) const { return vectorFromPose(B[j] * S[j].inverse()); }
+  PoseVector off(int j) const {
+    PoseVector e;
+    e << 0.004 * j, -0.003, 0.02 * j, 0.07, -0.05 * j, 0.02;
+    return exact(j) + e;
+  }
+};
+
+// Link (i, j)'s relative pose composed by hand: T_IJ = S_i⁻¹·exp(ν)⁻¹·B_j (view I where map I was
+// registered from; sensor J corrected in that frame).
+Eigen::Isometry3d handRelative(const Traverse& t, int i, int j, const PoseVector& nu) {
+  return t.S[i].inverse() * poseFromVector(nu).inverse() * t.B[j];
+}
+
+// Every tolerance below is 1e-12 on the 4×4 matrices: entries are rotations (≤ 1) and translations
+// of ≤ 7 m, each composed of at most six isometry products and one exp/log round trip, each
+// rounding by a few ε = 2.2e-16 of its operands' size: 7 m·6·4ε ≈ 4e-14, with room.
+constexpr double kPoseTol = 1e-12;
+
+TEST(Placement, ChainedForwardEachViewIsThePreviousTimesItsLink) {
+  const Traverse t;
+  // Link (1, 2) listed before (0, 1): view 2 is placed in the second pass, once view 1 is.
+  const std::vector<PlacementLink> links{link(1, 2, t.S[1], t.B[2], t.off(2)), link(0, 1, t.S[0], t.B[1], t.off(1))};
+  const std::vector<ViewPlacement> p = placeViews(3, 0, t.S[0], links);
+  const Eigen::Isometry3d T01 = handRelative(t, 0, 1, t.off(1)), T12 = handRelative(t, 1, 2, t.off(2));
+  ASSERT_EQ(p[1].how, PlacementHow::Matched);
+  ASSERT_EQ(p[2].how, PlacementHow::Matched);
+  EXPECT_TRUE(p[0].T_WS.matrix() == t.S[0].matrix());  // the reference where it was put
+  EXPECT_TRUE(near(p[1].T_WS, t.S[0] * T01, kPoseTol));
+  EXPECT_TRUE(near(p[2].T_WS, t.S[0] * T01 * T12, kPoseTol));
+  // View 2's chain: (0, 1) then (1, 2), both forward, each from where the view it starts at is.
+  ASSERT_EQ(p[2].chain.size(), 2u);
+  EXPECT_EQ(p[2].chain[0].link, &links[1]);
+  EXPECT_EQ(p[2].chain[1].link, &links[0]);
+  EXPECT_FALSE(p[2].chain[0].reverse);
+  EXPECT_FALSE(p[2].chain[1].reverse);
+  EXPECT_TRUE(p[2].chain[0].from_WS.matrix() == t.S[0].matrix());
+  EXPECT_TRUE(near(p[2].chain[1].from_WS, t.S[0] * T01, kPoseTol));
+  // Exact corrections chain to the true poses: P_1 = S_0·S_0⁻¹·S_1, P_2 = S_1·S_1⁻¹·S_2.
+  const std::vector<PlacementLink> exact{link(0, 1, t.S[0], t.B[1], t.exact(1)),
+                                         link(1, 2, t.S[1], t.B[2], t.exact(2))};
+  const std::vector<ViewPlacement> q = placeViews(3, 0, t.S[0], exact);
+  EXPECT_TRUE(near(q[1].T_WS, t.S[1], kPoseTol));
+  EXPECT_TRUE(near(q[2].T_WS, t.S[2], kPoseTol));
+}
+
+TEST(Placement, ChainedInReverseViewIIsViewJTimesTheInverseLink) {
+  const Traverse t;
+  // View 2 the reference: link (1, 2) places view 1 as P_1 = P_2·T_12⁻¹, then (0, 1) view 0 as
+  // P_0 = P_1·T_01⁻¹.
+  const std::vector<PlacementLink> links{link(0, 1, t.S[0], t.B[1], t.off(1)), link(1, 2, t.S[1], t.B[2], t.off(2))};
+  const std::vector<ViewPlacement> p = placeViews(3, 2, t.S[2], links);
+  const Eigen::Isometry3d T01 = handRelative(t, 0, 1, t.off(1)), T12 = handRelative(t, 1, 2, t.off(2));
+  EXPECT_EQ(p[2].how, PlacementHow::Reference);
+  ASSERT_EQ(p[1].how, PlacementHow::Matched);
+  ASSERT_EQ(p[0].how, PlacementHow::Matched);
+  EXPECT_TRUE(near(p[1].T_WS, t.S[2] * T12.inverse(), kPoseTol));
+  EXPECT_TRUE(near(p[0].T_WS, t.S[2] * T12.inverse() * T01.inverse(), kPoseTol));
+  ASSERT_EQ(p[0].chain.size(), 2u);
+  EXPECT_EQ(p[0].chain[0].link, &links[1]);
+  EXPECT_EQ(p[0].chain[1].link, &links[0]);
+  EXPECT_TRUE(p[0].chain[0].reverse);
+  EXPECT_TRUE(p[0].chain[1].reverse);
+  EXPECT_TRUE(near(p[0].chain[1].from_WS, t.S[2] * T12.inverse(), kPoseTol));
+  // Exact corrections: P_1 = S_2·(S_1⁻¹·S_2)⁻¹ = S_1, P_0 = S_1·(S_0⁻¹·S_1)⁻¹ = S_0.
+  const std::vector<PlacementLink> exact{link(0, 1, t.S[0], t.B[1], t.exact(1)),
+                                         link(1, 2, t.S[1], t.B[2], t.exact(2))};
+  const std::vector<ViewPlacement> q = placeViews(3, 2, t.S[2], exact);
+  EXPECT_TRUE(near(q[1].T_WS, t.S[1], kPoseTol));
+  EXPECT_TRUE(near(q[0].T_WS, t.S[0], kPoseTol));
+}
+
+TEST(Placement, ARejectedLinkPlacesNothingAndAnotherAcceptedLinkPlacesItsView) {
+  const Traverse t;
+  // (0, 1) accepted, (1, 2) rejected: view 2 is reached by no accepted link, so it is left out.
+  std::vector<PlacementLink> links{link(1, 2, t.S[1], t.B[2], t.off(2), false), link(0, 1, t.S[0], t.B[1], t.off(1))};
+  const std::vector<ViewPlacement> p = placeViews(3, 0, t.S[0], links);
+  EXPECT_EQ(p[1].how, PlacementHow::Matched);
+  EXPECT_EQ(p[2].how, PlacementHow::LeftOut);
+  EXPECT_TRUE(p[2].chain.empty());
+  // Add (2, 1), accepted: view 2 is placed through it in reverse from view 1, P_2 = P_1·T_21⁻¹,
+  // and not where the rejected (1, 2) would have put it, P_1·T_12.
+  links.push_back(link(2, 1, t.S[2], t.B[1], t.off(1)));
+  const std::vector<ViewPlacement> q = placeViews(3, 0, t.S[0], links);
+  const Eigen::Isometry3d T01 = handRelative(t, 0, 1, t.off(1));
+  const Eigen::Isometry3d T21 = handRelative(t, 2, 1, t.off(1));
+  const Eigen::Isometry3d T12 = handRelative(t, 1, 2, t.off(2));
+  ASSERT_EQ(q[2].how, PlacementHow::Matched);
+  EXPECT_TRUE(near(q[2].T_WS, t.S[0] * T01 * T21.inverse(), kPoseTol));
+  EXPECT_FALSE(near(q[2].T_WS, t.S[0] * T01 * T12, 1e-3));
+  ASSERT_EQ(q[2].chain.size(), 2u);
+  EXPECT_EQ(q[2].chain[0].link, &links[1]);
+  EXPECT_FALSE(q[2].chain[0].reverse);
+  EXPECT_EQ(q[2].chain[1].link, &links[2]);
+  EXPECT_TRUE(q[2].chain[1].reverse);
+  // Nothing accepted reaches a view: everything but the reference is left out.
+  for (PlacementLink& l : links) l.accepted = false;
+  const std::vector<ViewPlacement> none = placeViews(3, 0, t.S[0], links);
+  EXPECT_EQ(none[0].how, PlacementHow::Reference);
+  EXPECT_EQ(none[1].how, PlacementHow::LeftOut);
+  EXPECT_EQ(none[2].how, PlacementHow::LeftOut);
 }
 
 // A map with slopes in both directions (the dome), its σ from P = diag of a few mm and mrad.

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 
 #include "terrains/craters.hpp"
@@ -89,6 +90,47 @@ TEST(Terrain, PlaneTiltMatchesTheClosedForm) {
   const Eigen::Vector3d rotated_x =
       Eigen::AngleAxisd(10.0 * kDeg, Eigen::Vector3d::UnitY()) * Eigen::Vector3d::UnitX();
   EXPECT_NEAR(*makeTerrain(s, 0).ground.height(1.0, 0.0), rotated_x.z() / rotated_x.x(), 1e-12);
+}
+
+// surfaceAt on a tilted plane is the plane's closed form z = y·tan(α) − x·tan(β) anywhere inside
+// the grid, off its nodes too (a triangulated plane is the plane; the heights and the barycentric
+// sums round by a few ε of z ≤ 1.5 m, so 1e-12); nullopt outside. A square pyramid of half-width
+// w and height h standing on it at (cx, cy) lifts the surface to its faces, base + h·(1 −
+// max(|x − cx|, |y − cy|)/w); a rock sunk below the ground leaves the ground.
+TEST(Terrain, SurfaceAtIsThePlaneAndTheHighestRockFaceAboveIt) {
+  TerrainSpec s = spec(TerrainKind::Plane);  // 4 m × 3 m
+  s.slope_deg = {12.0, -7.0};
+  Terrain t = makeTerrain(s, 0);
+  const auto plane = [&](double x, double y) { return y * std::tan(12.0 * kDeg) - x * std::tan(-7.0 * kDeg); };
+  for (const Eigen::Vector2d& p : {Eigen::Vector2d(0.013, -0.27), Eigen::Vector2d(-1.99, 1.49),
+                                   Eigen::Vector2d(1.234, 0.777), Eigen::Vector2d(1.999, -1.499)}) {
+    const std::optional<double> z = surfaceAt(t, p.x(), p.y());
+    ASSERT_TRUE(z.has_value()) << p.transpose();
+    EXPECT_NEAR(*z, plane(p.x(), p.y()), 1e-12) << p.transpose();
+  }
+  EXPECT_FALSE(surfaceAt(t, 2.01, 0.0).has_value());
+  EXPECT_FALSE(surfaceAt(t, 0.0, -1.51).has_value());
+
+  // The pyramid: apex h above the centre of its square base (on the plane at the centre, so the
+  // base's corners are within w·(tan 12° + tan 7°) = 0.08 m of the plane), four faces and the
+  // base's two triangles (horizontal: below the faces, never the top).
+  const double w = 0.3, h = 0.5, cx = 0.4, cy = -0.2;
+  Rock pyramid;
+  pyramid.center = {cx, cy, plane(cx, cy)};
+  pyramid.vertices = {{-w, -w, 0}, {w, -w, 0}, {w, w, 0}, {-w, w, 0}, {0, 0, h}};
+  pyramid.faces = {{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}, {0, 2, 1}, {0, 3, 2}};
+  t.rocks.push_back(pyramid);
+  for (const Eigen::Vector2d& d : {Eigen::Vector2d(0, 0), Eigen::Vector2d(0.1, 0.05), Eigen::Vector2d(-0.12, 0.2),
+                                   Eigen::Vector2d(0.05, -0.25)}) {
+    const double x = cx + d.x(), y = cy + d.y();
+    const double face = plane(cx, cy) + h * (1 - d.cwiseAbs().maxCoeff() / w);
+    ASSERT_GT(face, plane(x, y));  // the face is the top there
+    EXPECT_NEAR(*surfaceAt(t, x, y), face, 1e-12) << d.transpose();
+  }
+  EXPECT_NEAR(*surfaceAt(t, cx + 0.5, cy), plane(cx + 0.5, cy), 1e-12);  // beside it: the ground
+  // Sunk 1 m: every face is below the ground, which stays the top.
+  t.rocks.back().center.z() -= 1.0;
+  EXPECT_NEAR(*surfaceAt(t, cx + 0.1, cy + 0.05), plane(cx + 0.1, cy + 0.05), 1e-12);
 }
 
 TEST(Terrain, SinusoidIsAnEggCrate) {

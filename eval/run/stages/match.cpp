@@ -251,7 +251,7 @@ void run(RunState& s) {
         trace.push_back({{"iteration", k}, {"E", res.E_m2[k]}, {"rms_m", res.rms_m[k]}, {"lines", res.lines[k]}});
       pair["trace"] = trace;
       writeJson(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + methodFileName(name) + ".json"), pair);
-      registered.push_back({name, perception::poseFromVector(reg.nu).inverse() * believed_WS, res.rms_m});
+      registered.push_back({name, reg.corrected_WS, res.rms_m});
       PairEstimate estimate{i, j, method, T_est, reg.nu, std::nullopt};
       if (covariance && res.covariance.allFinite()) estimate.covariance = res.covariance;
       estimate.covariance_calibrated = covarianceCalibrated(method, sc.sensor);

@@ -1,10 +1,9 @@
-// The merge stage (docs/scenario.md, "merge"; docs/composite.md): every view's scan mapped on the
-// composite grid at its pose — the true one, or the rover's, chained from view 0 through the first
-// listed matching method's estimates — and merged by eq. 9 (perception::mergeInto). With matched
-// poses each link's covariance is propagated into the cells' σ (perception::registrationSigma), so
-// a composite built on a poor match says so. Scored against ground truth: maps/composite_*.
+// The merge stage (docs/scenario.md, "merge"; docs/composite.md): the views' poses — the true ones,
+// or the rover's, chained from view 0 through the first listed matching method's estimates — and
+// the composite the rover builds on them (perception::buildComposite: each scan mapped on the
+// composite grid at its pose, each link's covariance propagated into the cells' σ, merged by eq. 9),
+// scored against ground truth: maps/composite_*, metrics.composite.
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 
 #include "eval/score/map_metrics.hpp"
@@ -42,36 +41,19 @@ void run(RunState& s) {
     for (std::size_t k = 0; k < s.views.size(); ++k)
       placements[k] = {k == 0 ? perception::PlacementHow::Reference : perception::PlacementHow::True, s.views[k].T_WS, {}};
   }
-  int views_used = 0;
-  perception::LocusConfig locus = locusConfig(sc);
-  locus.footprint_sigma = true;  // the footprint's error is shared by every view (docs/composite.md)
-  // σ without the terrain's part (docs/locus.md, σ_rough): what is left is the part every view
-  // of a cell shares (docs/composite.md).
-  perception::LocusConfig noise_only = locus;
-  noise_only.roughness = false;
-  perception::ElevationMap composite(grid);
-  perception::Raster<float> composite_shared = perception::Raster<float>::Zero(grid.rows, grid.cols);
+  // The rover's composite (perception::buildComposite); what some view could see is the truth's:
+  // visible if any view sees the true surface, else hidden if one view's field of view holds it
+  // behind terrain.
+  std::vector<const perception::ScanMap*> scans;
+  for (const ViewState& v : s.views) scans.push_back(v.locus ? &*v.locus : nullptr);
+  perception::ElevationMap composite = perception::buildComposite(scans, placements, grid, locusConfig(sc));
   const perception::ElevationMap truth = s.truth->elevation(grid);
   perception::Raster<std::uint8_t> visible = perception::Raster<std::uint8_t>::Zero(grid.rows, grid.cols);
+  int views_used = 0;
   for (std::size_t k = 0; k < s.views.size(); ++k) {
-    const ViewState& v = s.views[k];
     if (placements[k].how == perception::PlacementHow::LeftOut) continue;
     ++views_used;
-    // The scan as the map stage had it (unwrapped, its edges), at the composite's pose for it.
-    perception::ElevationMap map = perception::mapAtPose(*v.locus, placements[k].T_WS, grid, locus);
-    const perception::ElevationMap noise = perception::mapAtPose(*v.locus, placements[k].T_WS, grid, noise_only);
-    perception::Raster<float> shared = perception::Raster<float>::Zero(grid.rows, grid.cols);
-    for (int r = 0; r < grid.rows; ++r)
-      for (int c = 0; c < grid.cols; ++c)
-        if (map.stateAt(r, c) == perception::CellState::Known && noise.stateAt(r, c) == perception::CellState::Known)
-          shared(r, c) = std::sqrt(std::max(0.f, map.sigma()(r, c) * map.sigma()(r, c) - noise.sigma()(r, c) * noise.sigma()(r, c)));
-    // Each link's pose covariance, first order and independent: variances add.
-    const perception::Raster<float> extra = perception::placementSigma(map, placements[k].chain);
-    perception::addSigma(map, extra);
-    perception::mergeInto(composite, composite_shared, map, shared);
-    // What some view could see: visible if any view sees the true surface, else hidden if one
-    // view's field of view holds it behind terrain.
-    const auto& vis = *v.visibility;
+    const auto& vis = *s.views[k].visibility;
     for (int r = 0; r < grid.rows; ++r)
       for (int c = 0; c < grid.cols; ++c) {
         const std::uint8_t a = visible(r, c), b = vis(r, c);

@@ -30,26 +30,6 @@ std::string metres(double v) {
   return text;
 }
 
-// The top of a generated terrain at (x, y): the ground, or the highest rock face above it (the
-// surface the ground truth casts onto); nullopt outside the heightfield.
-std::optional<double> surfaceAt(const terrains::Terrain& terrain, double x, double y) {
-  std::optional<double> top = terrain.ground.height(x, y);
-  if (!top) return std::nullopt;
-  for (const terrains::Rock& rock : terrain.rocks) {
-    for (const Eigen::Vector3i& f : rock.faces) {
-      const Eigen::Vector3d a = rock.center + rock.vertices[f[0]], b = rock.center + rock.vertices[f[1]],
-                            c = rock.center + rock.vertices[f[2]];
-      const double d = (b.y() - c.y()) * (a.x() - c.x()) + (c.x() - b.x()) * (a.y() - c.y());
-      if (std::abs(d) < 1e-15) continue;  // a vertical face
-      const double la = ((b.y() - c.y()) * (x - c.x()) + (c.x() - b.x()) * (y - c.y())) / d;
-      const double lb = ((c.y() - a.y()) * (x - c.x()) + (a.x() - c.x()) * (y - c.y())) / d;
-      const double lc = 1.0 - la - lb;
-      if (la >= 0 && lb >= 0 && lc >= 0) top = std::max(*top, la * a.z() + lb * b.z() + lc * c.z());
-    }
-  }
-  return top;
-}
-
 // A view the terrain would swallow or that has no terrain under it: refused before the run writes
 // anything (docs/errors.md, "Views: over the terrain and above it"). `surface` is the terrain's
 // top at (x, y) or nullopt outside it; `free_below` says whether the sensor sees ground straight
@@ -91,7 +71,7 @@ void run(RunState& s) {
     std::optional<DemSurface> dem;
     const terrains::Terrain terrain = scenarioTerrain(sc, &dem);  // a DEM may refuse: before any file
     for (std::size_t k = 0; k < sc.views.size(); ++k)
-      checkView(sc, k, surfaceAt(terrain, sc.views[k].xyz_m.x(), sc.views[k].xyz_m.y()), true);
+      checkView(sc, k, terrains::surfaceAt(terrain, sc.views[k].xyz_m.x(), sc.views[k].xyz_m.y()), true);
     createOutDir(s.out);
     createOutDir(s.out / "world");
     const std::filesystem::path xml = sim::writeWorld(terrain, s.out / "world", sc.name);
