@@ -10,6 +10,7 @@
 #include <optional>
 #include <string>
 
+#include "eval/score/registration_score.hpp"
 #include "eval/scenario/io.hpp"
 #include "eval/pictures/match_figures.hpp"
 #include "eval/run/pair_registration.hpp"
@@ -51,21 +52,6 @@ nlohmann::ordered_json featuresJson(const std::vector<perception::Feature>& feat
     out.push_back(e);
   }
   return out;
-}
-
-// The verdict's figures (perception::Assessment).
-nlohmann::ordered_json assessmentJson(const perception::Assessment& a) {
-  nlohmann::ordered_json j;
-  j["overlap"] = a.overlap;
-  j["overlap_fraction"] = a.overlap_fraction;
-  j["inlier_fraction"] = a.inlier_fraction;
-  j["rms_normalized"] = a.rms_normalized;
-  j["correction_m"] = a.correction_m;
-  j["correction_deg"] = a.correction_deg;
-  j["mahalanobis2"] = a.mahalanobis2;
-  j["degenerate"] = a.degenerate;
-  if (std::isfinite(a.step_mahalanobis2)) j["step_mahalanobis2"] = a.step_mahalanobis2;
-  return j;
 }
 
 // ---- Pictures (eval/pictures/match_figures.hpp), apart from the registration: they only read its results.
@@ -210,7 +196,7 @@ void run(RunState& s) {
       s.addTime("match", seconds);
       const Eigen::Isometry3d& T_est = result.T_est;
       const perception::PoseError err = result.error, start = result.start;
-      const bool success = err.translation_m <= spec.success_translation_m && err.rotation_deg <= spec.success_rotation_deg;
+      const bool success = isSuccess(err, spec);
       const std::string name = matchMethodName(method);
       nlohmann::ordered_json pair;
       pair["pair"] = {i, j};
@@ -259,21 +245,8 @@ void run(RunState& s) {
       estimate.T_WS_i = vi.T_WS;
       estimate.believed_WS_j = believed_WS;
       s.estimates.push_back(estimate);
-      nlohmann::ordered_json m;
-      m["pair"] = {i, j};
-      m["method"] = name;
-      m["translation_error_m"] = err.translation_m;
-      m["rotation_error_deg"] = err.rotation_deg;
-      m["success"] = success;
-      m["accepted"] = a.accepted;
-      m["false_accept"] = a.accepted && !success;
-      m["reject_reasons"] = a.reject_reasons;
-      m["assessment"] = assessmentJson(a);
-      m["iterations"] = reg.iterations;
-      m["time_s"] = seconds;
-      m["initial_translation_error_m"] = start.translation_m;
-      m["initial_rotation_error_deg"] = start.rotation_deg;
-      s.metrics["registration"].push_back(m);
+      const RegistrationScore score{i, j, name, err, start, success, a, reg.iterations, seconds};
+      s.metrics["registration"].push_back(toJson(score));
       char line[240];
       std::snprintf(line, sizeof line, "match     views %d-%d %-18s %3d iterations: error %.4f m %.3f deg (from %.3f m %.2f deg)%s%s",
                     i, j, name.c_str(), reg.iterations, err.translation_m, err.rotation_deg, start.translation_m,

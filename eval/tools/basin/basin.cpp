@@ -29,6 +29,7 @@
 #include "eval/run/pair_registration.hpp"
 #include "eval/run/stages.hpp"
 #include "eval/score/stats.hpp"
+#include "eval/score/registration_score.hpp"
 #include "eval/tools/jobs.hpp"
 #include "eval/tools/sweep/sweep.hpp"
 
@@ -382,8 +383,7 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
       std::vector<std::string> row{matchMethodName(m), csvNumber(t_m), csvNumber(r_deg), std::to_string(d.trial)};
       try {
         const PairResult res = pair.run(m, T_0);
-        const bool ok = res.error.translation_m <= spec.success_translation_m &&
-                        res.error.rotation_deg <= spec.success_rotation_deg;
+        const bool ok = isSuccess(res.error, spec);
         row.insert(row.end(), {csvNumber(res.error.translation_m), csvNumber(res.error.rotation_deg),
                                ok ? "true" : "false", std::to_string(res.reg.iterations),
                                opt.timing ? csvNumber(res.seconds) : "",

@@ -20,6 +20,7 @@
 #include "eval/run/run_state.hpp"
 #include "eval/run/stages.hpp"
 #include "eval/score/stats.hpp"
+#include "eval/score/registration_score.hpp"
 #include "eval/tools/shards.hpp"
 #include "perception/iconic.hpp"
 #include "perception/locus_mapper.hpp"
@@ -139,7 +140,7 @@ std::vector<std::vector<std::string>> registerPair(const Scenario& scenario, con
     const double seconds = watch.seconds();
     const Eigen::Isometry3d T_est = vi.T_WS.inverse() * perception::poseFromVector(r.nu).inverse() * believed_WS;
     const perception::PoseError err = perception::poseError(T_IJ, T_est);
-    const bool ok = err.translation_m <= spec.success_translation_m && err.rotation_deg <= spec.success_rotation_deg;
+    const bool ok = isSuccess(err, spec);
     rows.push_back({terrain, std::to_string(sc.seed), v.name, flag(v.normals), flag(v.robust), flag(v.gain),
                     flag(v.backtracking), csvNumber(start.translation_m), csvNumber(start.rotation_deg),
                     csvNumber(err.translation_m), csvNumber(err.rotation_deg), flag(ok),
