@@ -151,7 +151,7 @@ unsigned LocusMapper::mapLanes(LaneIsa isa, const MapGrid& grid, int row, int c0
   k.limit = column_of_.limit, k.index_scale = column_of_.index_scale, k.step = column_of_.step;
   k.last_col = last_col_, k.last_row = last_row_, k.phi0 = phi0_, k.inv_dphi = inv_dphi_;
   k.neg_inv_dphi = -1.0 / dphi_, k.inv_dtheta = inv_dtheta_;
-  k.eps = config_.epsilon_rad, k.noise_k = config_.sensor.noise_k, k.qvar = quantization_var_;
+  k.eps = config_.epsilon_rad, k.noise_k = sensor_.noise_k, k.qvar = quantization_var_;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) k.R[i][j] = rot_SW_(i, j);
     k.t[i] = trans_SW_[i];

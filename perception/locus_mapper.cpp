@@ -527,7 +527,7 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   const int f0 = far_mixed ? r1 - d : r1;
   const double fa = far_mixed ? far1 : far0, fb = far_mixed ? far2 : far1;
   const auto farInverseAt = [&](double t) { return 1 / fa + t * (1 / fa - 1 / fb); };
-  if (mix && config_.sensor.mixed_pixels && std::isfinite(fb)) {
+  if (mix && sensor_.mixed_pixels && std::isfinite(fb)) {
     // Where in its footprint the mixed pixel puts the edge: the near fraction of its footprint,
     // from its range between the two surfaces carried to it, read as a uniform disk's (radius
     // `radius` scanlines about its centre). The near surface reaches the far end of what that
@@ -539,10 +539,10 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
       const double A = SensorModel::nearFraction(rho_m, rho_n, rho_f);
       // dA/dρ_m ≈ −1/(ρ_f − ρ_n); the near extension's and the far extrapolation's (2·i_a − i_b:
       // five times a sample's variance) errors enter alike.
-      const double sigma_n = fit.sigma(config_.sensor.rangeVariance(rho_n), 1.0);
-      const double sigma_A = std::sqrt(config_.sensor.rangeVariance(rho_m) + sigma_n * sigma_n +
-                                       5 * config_.sensor.rangeVariance(rho_f)) / (rho_f - rho_n);
-      const double radius = 0.5 * config_.sensor.beamDivergence() / dphi_;
+      const double sigma_n = fit.sigma(sensor_.rangeVariance(rho_n), 1.0);
+      const double sigma_A = std::sqrt(sensor_.rangeVariance(rho_m) + sigma_n * sigma_n +
+                                       5 * sensor_.rangeVariance(rho_f)) / (rho_f - rho_n);
+      const double radius = 0.5 * sensor_.beamDivergence() / dphi_;
       // Where even the fraction's upper bound is the whole footprint, the pixel may lie wholly on
       // the near surface and does not bound the edge: the next scanline's footprint, which reads
       // as the far surface, does — its own near fraction is at most the cubature's error and 2σ.
@@ -556,7 +556,7 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   // The extension's range errs by σ_ext = σ_p·√(1/n + (t + k̄)²/S_kk) (σ_p at the near surface's
   // range); the near surface gets one σ_ext more, so that noise rarely puts a visible lip top into
   // the shadow (each σ_ext more costs shadow recall: docs/locus.md has the trade's figures).
-  const double sigma_ext = fit.sigma(config_.sensor.rangeVariance(1 / fit.at_mean), t_near);
+  const double sigma_ext = fit.sigma(sensor_.rangeVariance(1 / fit.at_mean), t_near);
   if (!(inv_near > 0) || lineAt(n0 - t_near * d) < 1 / inv_near + sigma_ext) return true;
   // The far surface, carried t_far scanlines: the line behind it there.
   if (std::isfinite(fb) && lineAt(f0 + t_far * d) * farInverseAt(t_far) >= 1) return true;
@@ -586,7 +586,7 @@ bool LocusMapper::linkedMixedPixel(int r1, int r2, const Sample& s1, const Sampl
   const double inv = 2 / i1 - 1 / i2;  // the other surface's inverse range extrapolated to m
   if (!(inv > 0)) return false;
   const double departure = (i_m - 1 / inv) * (far_side ? 1.0 : -1.0);  // towards the first surface
-  return departure > 3 * std::sqrt(6 * config_.sensor.rangeVariance(i_m));
+  return departure > 3 * std::sqrt(6 * sensor_.rangeVariance(i_m));
 }
 
 // A bracket with edge pixels on one scanline only, next to an occluding edge: its edge-side
@@ -610,7 +610,7 @@ bool LocusMapper::pastUntrustedEdgeSample(bool near_side, int r1, int r2, const 
   if (beyond < 0 || beyond >= rows_ || !edgeAt(beyond, sm)) return false;
   const InverseRangeFit fit = fitInverseRange(rangeAt(o, so), o, into, so);
   if (fit.n < 2) return false;  // no course to carry: the bracket decides, as before
-  const double var_p = config_.sensor.rangeVariance(1 / fit.at_mean);
+  const double var_p = sensor_.rangeVariance(1 / fit.at_mean);
   // The surface carried t scanlines from o towards m and beyond, in range.
   const auto extension = [&](double t) {
     const double inv = fit.inverseAt(t);
@@ -707,7 +707,7 @@ void LocusMapper::finish(const Line& line, const Eigen::Vector3d& u, const Eigen
     int rc = r1;
     Sample sc = s1;
     for (int k = 0; k < 4 && sc.valid; ++k) {
-      if (sc.delta < -3 * config_.sensor.rangeSigma(sc.rho - sc.delta)) break;
+      if (sc.delta < -3 * sensor_.rangeSigma(sc.rho - sc.delta)) break;
       rc -= r2 - r1;
       sc = rc >= 0 && rc < rows_ ? atRow(line, rc) : Sample{};
       if (sc.valid && !(sc.delta < 0)) sc.valid = false;

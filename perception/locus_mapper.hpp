@@ -21,11 +21,10 @@ struct LocusConfig {
   double epsilon_rad = 1e-5;  // the search stops when the bracket in φ is narrower than this
   bool bisection = false;     // true: plain bisection as in the paper; false: Hermite, IQI steps
                               // (the same bracket and stopping rule, fewer evaluations)
-  SensorModel sensor;         // its σ_ρ (SensorModel::rangeVariance) gives σ along the line
   double z_margin_m = 0.3;    // lines are searched within the returns' bounds ± this margin (docs/locus.md)
   bool roughness = true;      // σ includes the surface's roughness between pixels (docs/locus.md)
   double roughness_hurst = 0.7;  // H of the fBm assumed between pixels (0.5: Brownian)
-  // σ also includes the footprint's averaging of the rough surface (with sensor.mixed_pixels and
+  // σ also includes the footprint's averaging of the rough surface (with the sensor's mixed pixels and
   // roughness; docs/locus.md, "The footprint"). Off for single maps: feature detection reads σ as
   // the noise of its curvature fits, and this error is a smooth bias that every view of a cell
   // shares, which only the composite must not average away (docs/composite.md); the merge turns it on.
@@ -75,14 +74,16 @@ class LaneIsaCap {
 
 class LocusMapper {
  public:
-  // `image` (and `edges`, if given: same size) must outlive the mapper. Construction tabulates,
+  // `image` (and `edges`, if given: same size) must outlive the mapper; `sensor` is the model the
+  // image was taken with (its σ_ρ, SensorModel::rangeVariance, gives σ along a line; its beam the
+  // footprint's term). Construction tabulates,
   // once per image and in parallel, what every search needs per 2×2 pixel cell (which pixels
   // returned, which are edge pixels, the local normal and roughness of σ). Throws
   // std::invalid_argument if the image's scan angles are not evenly spaced or sizes differ.
   // The mapper works in the gravity-aligned map frame T_WM (default: the world): lines, points
   // and maps are in M.
-  LocusMapper(const RangeImage& image, const Raster<std::uint8_t>* edges, const LocusConfig& config = {},
-              const Eigen::Isometry3d& T_WM = Eigen::Isometry3d::Identity());
+  LocusMapper(const RangeImage& image, const SensorModel& sensor, const Raster<std::uint8_t>* edges,
+              const LocusConfig& config = {}, const Eigen::Isometry3d& T_WM = Eigen::Isometry3d::Identity());
 
   // f(u, v): where the line u + s·v (map frame, v unit, pointing away from the ground: the
   // search runs from +v towards −v) meets the surface the sensor saw. Thread-safe.
@@ -99,6 +100,7 @@ class LocusMapper {
   Eigen::Vector3d surfaceNormal(const LocusHit& hit) const;
 
   const RangeImage& image() const { return image_; }
+  const SensorModel& sensor() const { return sensor_; }
   const Eigen::Isometry3d& mapFrame() const { return T_WM_; }
 
   // The elevation at any (x, y): the vertical line through it.
@@ -240,6 +242,7 @@ class LocusMapper {
 
   const RangeImage& image_;
   const Raster<std::uint8_t>* edges_;
+  SensorModel sensor_;
   LocusConfig config_;
   Eigen::Isometry3d T_WM_;  // the map frame
   Eigen::Matrix3d rot_SW_;    // T_SW = T_WS⁻¹: rotation
@@ -249,7 +252,7 @@ class LocusMapper {
   std::vector<double> roughness_g_;  // the fBm interpolation factor over f: across scanlines, then along
   double phi0_, dphi_, theta0_, dtheta_;
   double inv_dtheta_, inv_dphi_;
-  double quantization_var_;  // config_.sensor.quantizationVariance(), for the lanes
+  double quantization_var_;  // sensor_.quantizationVariance(), for the lanes
   double last_row_, last_col_;  // rows − 1 and cols − 1: the largest fractional row and column
   std::vector<double> sin_phi_, cos_phi_, sin_theta_, cos_theta_;
   AngleTable column_of_;  // over tan θ

@@ -116,9 +116,9 @@ inline double roughnessVariance(double mean_d2, double f, double var_pixel, cons
 
 }  // namespace
 
-LocusMapper::LocusMapper(const RangeImage& image, const Raster<std::uint8_t>* edges, const LocusConfig& config,
-                         const Eigen::Isometry3d& T_WM)
-    : image_(image), edges_(edges), config_(config), T_WM_(T_WM), rows_(image.rows()),
+LocusMapper::LocusMapper(const RangeImage& image, const SensorModel& sensor, const Raster<std::uint8_t>* edges,
+                         const LocusConfig& config, const Eigen::Isometry3d& T_WM)
+    : image_(image), edges_(edges), sensor_(sensor), config_(config), T_WM_(T_WM), rows_(image.rows()),
       cols_(image.cols()) {
   if (rows_ < 2 || cols_ < 2)
     throw std::invalid_argument("LocusMapper: the range image needs at least 2x2 pixels");
@@ -149,11 +149,11 @@ LocusMapper::LocusMapper(const RangeImage& image, const Raster<std::uint8_t>* ed
   // h the pixel spacing), half the footprint's term from each direction.
   const double h2 = 2 * config.roughness_hurst;
   const double K = (36 - 3 * (2 + 2 * std::pow(3.0, config.roughness_hurst) + std::pow(2.0, h2))) / 64;
-  const double b = std::sqrt(2.0 / 3.0) * 0.5 * config.sensor.beamDivergence();
+  const double b = std::sqrt(2.0 / 3.0) * 0.5 * sensor.beamDivergence();
   for (int dir = 0; dir < 2; ++dir) {
     const double spacing = dir == 0 ? dphi_ : dtheta_;
     const double footprint =
-        config.footprint_sigma && config.sensor.mixed_pixels ? 0.5 * K * std::pow(b / spacing, h2) : 0.0;
+        config.footprint_sigma && sensor.mixed_pixels ? 0.5 * K * std::pow(b / spacing, h2) : 0.0;
     for (int i = 0; i <= kRoughnessSteps; ++i) {
       const double f = double(i) / kRoughnessSteps;
       roughness_g_.push_back((std::pow(f, h2) * (1 - f) + std::pow(1 - f, h2) * f - f * (1 - f) + footprint) /
@@ -170,7 +170,7 @@ LocusMapper::LocusMapper(const RangeImage& image, const Raster<std::uint8_t>* ed
   }
   inv_dtheta_ = 1.0 / dtheta_;
   inv_dphi_ = 1.0 / dphi_;
-  quantization_var_ = config.sensor.quantizationVariance();
+  quantization_var_ = sensor.quantizationVariance();
   last_row_ = rows_ - 1;
   last_col_ = cols_ - 1;
   column_of_ = AngleTable(true, 3.0, theta0_, inv_dtheta_);  // |θ| ≤ 71.6°
@@ -261,7 +261,7 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   // Σw² of the bilinear weights factorises: ((1−fr)² + fr²)·((1−fc)² + fc²).
   const double gr = 1 - fr, gc = 1 - fc;
   const double sum_w2 = (gr * gr + fr * fr) * (gc * gc + fc * fc);
-  const double var_pixel = config_.sensor.rangeVariance(rho);
+  const double var_pixel = sensor_.rangeVariance(rho);
   const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
   const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
                        roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data() + kRoughnessSteps + 1);

@@ -12,6 +12,10 @@ bool twoStage(RegistrationMethod method) {
          method == RegistrationMethod::FeaturesLm || method == RegistrationMethod::FeaturesIconicWeighted;
 }
 
+bool readsWeightedMaps(RegistrationMethod method) {
+  return method == RegistrationMethod::IconicWeighted || method == RegistrationMethod::FeaturesIconicWeighted;
+}
+
 AcceptanceConfig acceptanceFor(const RegistrationConfig& config, const Eigen::Isometry3d& T_0) {
   AcceptanceConfig a = config.acceptance;
   if (config.odometry) a.prior = config.odometry->at(T_0.translation().norm());
@@ -91,21 +95,64 @@ Verification verifyHypotheses(const ElevationMap& map_i, const LocusMapper& imag
   return v;
 }
 
-RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& image_j,
-                                 const Raster<std::uint8_t>* edges_j, const MapGrid& grid_j,
-                                 RegistrationMethod method, const RegistrationConfig& config,
-                                 const LocusMapper* map_i_source, const ElevationMap* feature_map_i) {
-  if (!map_i.grid().inWorldFrame()) throw std::invalid_argument("registerViews: map I is not in the world frame");
-  if (feature_map_i && !feature_map_i->grid().sameAs(map_i.grid()))
-    throw std::invalid_argument("registerViews: the feature stage's map I is not on map I's grid");
+namespace {
+
+LocusConfig withFootprint(LocusConfig locus) {
+  locus.footprint_sigma = true;
+  return locus;
+}
+
+}  // namespace
+
+ReferenceView referenceView(const ScanMap& scan, const MapGrid& grid, const RegistrationConfig& config,
+                            bool with_weighted) {
+  if (!grid.inWorldFrame()) throw std::invalid_argument("referenceView: map I's grid is not in the world frame");
+  const Raster<std::uint8_t>* edges = scan.edges ? &*scan.edges : nullptr;
+  ReferenceView view;
+  view.T_WS = scan.image.T_WS;
+  view.map = LocusMapper(scan.image, scan.sensor, edges, config.locus, grid.T_WM).map(grid);
+  if (with_weighted) {
+    const LocusConfig weighted = withFootprint(config.locus);
+    view.weighted = LocusMapper(scan.image, scan.sensor, edges, weighted, grid.T_WM).map(grid);
+    view.source.emplace(scan.image, scan.sensor, edges, weighted);
+  }
+  return view;
+}
+
+ReferenceView referenceView(ElevationMap composite, const Eigen::Isometry3d& T_WS) {
+  if (!composite.grid().inWorldFrame())
+    throw std::invalid_argument("referenceView: the composite is not in the world frame");
+  ReferenceView view;
+  view.weighted = composite;
+  view.map = std::move(composite);
+  view.T_WS = T_WS;
+  return view;
+}
+
+RegistrationResult registerViews(const ReferenceView& view_i, const ScanMap& scan_j,
+                                 const Eigen::Isometry3d& believed_WS_j, RegistrationMethod method,
+                                 const RegistrationConfig& config) {
+  const bool weighted = readsWeightedMaps(method);
+  if (weighted && !view_i.weighted)
+    throw std::invalid_argument("registerViews: the weighted method needs view I's weighted map (referenceView)");
+  if (!view_i.map.grid().inWorldFrame()) throw std::invalid_argument("registerViews: map I is not in the world frame");
+  // Map I as this method's iconic stage reads it; the feature stage reads the plain maps.
+  const ElevationMap& map_i = weighted ? *view_i.weighted : view_i.map;
+  const ElevationMap& feature_map_i = view_i.map;
+  const LocusMapper* map_i_source = view_i.source ? &*view_i.source : nullptr;
+  // Image J as the rover has it: unwrapped, its edges, at the believed pose.
+  RangeImage image_j = scan_j.image;
+  image_j.T_WS = believed_WS_j;
+  const Raster<std::uint8_t>* edges_j = scan_j.edges ? &*scan_j.edges : nullptr;
+  const MapGrid grid_j = believedGrid(view_i.map.grid(), view_i.T_WS, believed_WS_j);
   RegistrationResult out;
-  const LocusMapper mapper(image_j, edges_j, config.locus);
+  const LocusMapper mapper(image_j, scan_j.sensor, edges_j, weighted ? withFootprint(config.locus) : config.locus);
   PoseVector nu0 = PoseVector::Zero();  // the rover trusts its belief
   if (method == RegistrationMethod::Features || twoStage(method)) {
     // Map J as the rover has it: in the believed world, on grid_j (in its own frame M_J).
-    const LocusMapper mapper_j(image_j, edges_j, config.feature_locus ? *config.feature_locus : config.locus, grid_j.T_WM);
+    const LocusMapper mapper_j(image_j, scan_j.sensor, edges_j, config.locus, grid_j.T_WM);
     out.map_j = mapper_j.map(grid_j);
-    out.features_i = extractFeatures(feature_map_i ? *feature_map_i : map_i, config.features);
+    out.features_i = extractFeatures(feature_map_i, config.features);
     out.features_j = extractFeatures(*out.map_j, config.features);
     FeatureMatchConfig match = config.match;
     const MapGrid& g = map_i.grid();  // in the world: its M is the world

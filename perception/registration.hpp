@@ -13,6 +13,7 @@
 #include "perception/feature_matching.hpp"
 #include "perception/features.hpp"
 #include "perception/iconic.hpp"
+#include "perception/scan_to_map.hpp"
 
 namespace ambler::perception {
 
@@ -30,9 +31,16 @@ enum class RegistrationMethod : std::uint8_t {
 
 // Whether the method runs feature matching first, then verifies its refined hypotheses.
 bool twoStage(RegistrationMethod method);
+// Whether the method's iconic stage is the weighted LM, which reads the maps with the footprint's
+// σ_z term (RegistrationConfig::locus).
+bool readsWeightedMaps(RegistrationMethod method);
 
 struct RegistrationConfig {
-  LocusConfig locus;          // how image J is met (its sensor model included)
+  // How both images are met (each scan brings its sensor model). The weighted methods add the
+  // footprint's term to σ_z in the maps their iconic stage reads (LocusConfig::footprint_sigma:
+  // the two views smooth the terrain over footprints of different size and shape, so between
+  // their maps that error is noise); their feature stage reads the plain maps.
+  LocusConfig locus;
   FeatureConfig features;     // feature extraction, both maps
   FeatureMatchConfig match;   // predict, verify, search; its max_shift_m is set by registerViews
   // The rover's prior on its dead-reckoning error: translation (m) and rotation (degrees) at most
@@ -52,10 +60,6 @@ struct RegistrationConfig {
   std::optional<OdometryModel> odometry;
   // Verification screens feature matching's pairings on the lines of every screen_stride-th cell.
   int screen_stride = 4;
-  // The locus configuration map J is made with for the feature stage, when it differs from
-  // `locus` (the weighted method maps with the footprint's σ_z term, which feature extraction
-  // should not read; eval sets this to the plain one). Unset: `locus`.
-  std::optional<LocusConfig> feature_locus;
 };
 
 // The verdict's thresholds for a pair whose believed relative pose is T_0 (sensor J in sensor
@@ -131,24 +135,39 @@ Matrix6d sensorPoseJacobian(const PoseVector& nu, const Eigen::Isometry3d& belie
 // translation), so that map J covers what sensor J sees as map I covers what sensor I sees.
 MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, const Eigen::Isometry3d& believed_WS_j);
 
-// Registers range image J (at the believed pose, with its edge mask or null) against map I. A
+// View I as registration reads it (map I's frame is the world): its map made with the
+// configuration's locus settings, what feature matching and every method but the weighted ones
+// read; for the weighted methods the same with the footprint's σ_z term, and the mapper it was made
+// with (the pixels of image I its lines share, IconicOptions::map1_source). T_WS is sensor I's
+// pose, from which map J's grid is carried (believedGrid).
+struct ReferenceView {
+  ElevationMap map;
+  std::optional<ElevationMap> weighted;  // absent: no weighted method can register against this view
+  std::optional<LocusMapper> source;     // absent for a map that is no single scan's (a composite)
+  Eigen::Isometry3d T_WS = Eigen::Isometry3d::Identity();
+};
+
+// View I from its scan, mapped at the scan's pose (scan.image.T_WS, in the world) on `grid` (in the
+// world frame); with_weighted: also the weighted methods' map and its mapper (the scan must then
+// outlive the view). Throws std::invalid_argument when the grid is not in the world frame.
+ReferenceView referenceView(const ScanMap& scan, const MapGrid& grid, const RegistrationConfig& config,
+                            bool with_weighted);
+// View I as a merged map (a composite, whose σ_z already has the footprint's term: every method
+// reads it), its reference pose T_WS. Throws std::invalid_argument when it is not in the world frame.
+ReferenceView referenceView(ElevationMap composite, const Eigen::Isometry3d& T_WS);
+
+// Registers scan J, which the rover believes was taken from believed_WS_j, against view I. A
 // two-stage method refines T_F, T_0 and feature matching's next-best distinct pairings
 // (FeatureMatch::ranked) by its iconic method and keeps the refinement of lowest robust iconic
 // cost over the lines all of them have: it never returns what its own cost rates worse than
-// refining T_0. Every result carries the rover's verdict (assessRegistration, config.acceptance).
-// The estimate ν maps map I's frame to the frame image J's believed pose lives in; the corrected
-// pose of sensor J is corrected_WS = correction·believed, correction = poseFromVector(ν)⁻¹.
-// Feature matching builds map J on grid_j (in the believed world; see believedGrid). Map I must
-// be in the world frame (its grid's T_WM the identity). map_i_source, if given, is the locus
-// mapper map I was made with (image I and its edges): the weighted method's covariance then
-// counts the pixels map I's lines share (IconicOptions::map1_source). feature_map_i, if given, is
-// the map I feature matching reads (made with config.feature_locus; the same grid as map_i), else
-// map_i. Throws std::invalid_argument when map I is not in the world frame or the two maps' grids
-// differ.
-RegistrationResult registerViews(const ElevationMap& map_i, const RangeImage& image_j,
-                                 const Raster<std::uint8_t>* edges_j, const MapGrid& grid_j,
-                                 RegistrationMethod method, const RegistrationConfig& config,
-                                 const LocusMapper* map_i_source = nullptr,
-                                 const ElevationMap* feature_map_i = nullptr);
+// refining T_0. Every result carries the rover's verdict (assessRegistration, config.acceptance:
+// the caller sets this pair's prior, acceptanceFor). The estimate ν maps map I's frame to the frame
+// the believed pose lives in; the corrected pose of sensor J is corrected_WS = correction·believed,
+// correction = poseFromVector(ν)⁻¹. Feature matching maps scan J on map I's grid carried to the
+// believed pose (believedGrid). Throws std::invalid_argument when a weighted method is asked of a
+// view without its weighted map.
+RegistrationResult registerViews(const ReferenceView& view_i, const ScanMap& scan_j,
+                                 const Eigen::Isometry3d& believed_WS_j, RegistrationMethod method,
+                                 const RegistrationConfig& config);
 
 }  // namespace ambler::perception

@@ -13,11 +13,10 @@ ScanMap scanToMap(const RangeImage& measured, const SensorModel& sensor, const E
   ScanMap out;
   out.image = measured;
   out.image.T_WS = T_WS;
+  out.sensor = sensor;
   if (sensor.ambiguity_m > 0) out.unwrapped = unwrapRanges(out.image, sensor);
   if (config.shadows == ShadowMethod::Gnc) out.edges = detectRangeEdges(out.image, sensor, config.gnc);
-  LocusConfig locus = config.locus;
-  locus.sensor = sensor;
-  const LocusMapper mapper(out.image, out.edges ? &*out.edges : nullptr, locus, grid.T_WM);
+  const LocusMapper mapper(out.image, sensor, out.edges ? &*out.edges : nullptr, config.locus, grid.T_WM);
   out.map = mapper.map(grid);
   return out;
 }
@@ -26,7 +25,7 @@ ElevationMap mapAtPose(const ScanMap& scan, const Eigen::Isometry3d& T_WS, const
                        const LocusConfig& locus) {
   RangeImage image = scan.image;
   image.T_WS = T_WS;
-  const LocusMapper mapper(image, scan.edges ? &*scan.edges : nullptr, locus, grid.T_WM);
+  const LocusMapper mapper(image, scan.sensor, scan.edges ? &*scan.edges : nullptr, locus, grid.T_WM);
   return mapper.map(grid);
 }
 

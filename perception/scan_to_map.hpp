@@ -22,13 +22,14 @@ enum class ShadowMethod : std::uint8_t {
 
 struct ScanToMapConfig {
   ShadowMethod shadows = ShadowMethod::Gnc;
-  LocusConfig locus;  // its sensor field is replaced by scanToMap's sensor
+  LocusConfig locus;
   GncConfig gnc;
 };
 
 // One scan's map and what was made on the way.
 struct ScanMap {
   RangeImage image;                              // the measured image after unwrapping, at the pose used
+  SensorModel sensor;                            // the model it was taken with
   long unwrapped = 0;                            // pixels moved by a multiple of the interval
   std::optional<Raster<std::uint8_t>> edges;     // the edge mask (ShadowMethod::Gnc)
   ElevationMap map;                              // on the asked grid, in its frame

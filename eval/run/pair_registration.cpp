@@ -9,34 +9,20 @@
 
 namespace ambler::eval {
 
-namespace {
-
-// The methods whose iconic stage is the weighted LM: they read the weighted map I.
-bool weightedMethod(MatchMethod m) { return m == MatchMethod::IconicWeighted || m == MatchMethod::FeaturesIconicWeighted; }
-
-}  // namespace
-
 PairRegistration::PairRegistration(const perception::ScanMap& view_i, const Eigen::Isometry3d& T_WS_i,
                                    const perception::ScanMap& view_j, const Eigen::Isometry3d& T_WS_j,
                                    perception::RegistrationConfig config, const std::vector<MatchMethod>& methods)
-    : i_(view_i), j_(view_j), T_WS_i_(T_WS_i), T_IJ_(T_WS_i.inverse() * T_WS_j), config_(std::move(config)) {
-  // Map I as registration maps it for the paper's methods (config.locus: the samples at edges
-  // trusted, as for map J), on the grid of the run's map I.
-  // Every method's result is assessed on it, the peers' too.
-  map_i_ = perception::LocusMapper(i_.image, i_.edges ? &*i_.edges : nullptr, config_.locus, i_.map.grid().T_WM)
-               .map(i_.map.grid());
-  // The weighted method's σ_z has the footprint's term: the two views smooth the terrain over
-  // footprints of different size and shape, so between their maps that error is noise. Its map I,
-  // and the mapper map I was made with (the pixels of image I that map I's lines share).
-  if (std::any_of(methods.begin(), methods.end(), weightedMethod)) {
-    weighted_config_ = config_;
-    weighted_config_.locus.footprint_sigma = true;
-    weighted_config_.feature_locus = config_.locus;  // feature matching reads the plain maps
-    const perception::Raster<std::uint8_t>* edges = i_.edges ? &*i_.edges : nullptr;
-    weighted_map_i_ = perception::LocusMapper(i_.image, edges, weighted_config_.locus, i_.map.grid().T_WM)
-                          .map(i_.map.grid());
-    source_i_.emplace(i_.image, edges, weighted_config_.locus);
-  }
+    : i_(view_i),
+      j_(view_j),
+      T_WS_i_(T_WS_i),
+      T_IJ_(T_WS_i.inverse() * T_WS_j),
+      config_(std::move(config)),
+      reference_(perception::referenceView(
+          i_, i_.map.grid(), config_,
+          std::any_of(methods.begin(), methods.end(), [](MatchMethod m) {
+            const auto paper = paperMethod(m);
+            return paper && perception::readsWeightedMaps(*paper);
+          }))) {
   if (std::any_of(methods.begin(), methods.end(), [](MatchMethod m) { return !paperMethod(m); }))
     returns_i_ = peers::returns(i_.image);
 }
@@ -82,22 +68,15 @@ PairResult PairRegistration::run(MatchMethod method, const Eigen::Isometry3d& T_
     out.T_est = relativeEstimate(out.reg, out.believed_WS);
     out.error = perception::poseError(T_IJ_, out.T_est);
     // The rover's verdict on the peer's estimate, by the same tests as the paper's methods'.
-    const perception::LocusMapper mapper(image, j_.edges ? &*j_.edges : nullptr, config_.locus);
-    out.reg.assessment = perception::assessRegistration(map_i_, mapper, out.reg.nu, out.believed_WS, nullptr, nullptr,
+    const perception::LocusMapper mapper(image, j_.sensor, j_.edges ? &*j_.edges : nullptr, config_.locus);
+    out.reg.assessment = perception::assessRegistration(reference_.map, mapper, out.reg.nu, out.believed_WS, nullptr, nullptr,
                                                         perception::acceptanceFor(config_, T_0));
     return out;
   }
-  // Image J as the rover has it: unwrapped, its edges, at the believed pose.
-  perception::RangeImage image = j_.image;
-  image.T_WS = out.believed_WS;
-  const perception::MapGrid grid_j = perception::believedGrid(map_i_.grid(), T_WS_i_, out.believed_WS);
   base::Stopwatch t;
-  const bool weighted = weightedMethod(method);
-  perception::RegistrationConfig config = weighted ? weighted_config_ : config_;
+  perception::RegistrationConfig config = config_;
   config.acceptance = perception::acceptanceFor(config, T_0);  // this pair's prior
-  out.reg = perception::registerViews(weighted ? *weighted_map_i_ : map_i_, image, j_.edges ? &*j_.edges : nullptr,
-                                      grid_j, *paper, config, source_i_ ? &*source_i_ : nullptr,
-                                      weighted ? &map_i_ : nullptr);
+  out.reg = perception::registerViews(reference_, j_, out.believed_WS, *paper, config);
   out.seconds = t.seconds();
   out.T_est = relativeEstimate(out.reg, out.believed_WS);
   out.error = perception::poseError(T_IJ_, out.T_est);

@@ -56,13 +56,10 @@ class PairRegistration {
   const perception::ScanMap& j_;
   Eigen::Isometry3d T_WS_i_, T_IJ_;
   perception::RegistrationConfig config_;
-  perception::ElevationMap map_i_;                   // map I as registration maps it (config.locus)
-  // iconic_weighted's: σ_z with the footprint's term (LocusConfig::footprint_sigma) in both maps,
-  // map I so made, and its mapper for the covariance (docs/matching.md, "Calibration").
-  perception::RegistrationConfig weighted_config_;
-  std::optional<perception::ElevationMap> weighted_map_i_;
-  std::optional<perception::LocusMapper> source_i_;
-  std::vector<Eigen::Vector3d> returns_i_;           // the peers' target: scan I's returns in the world
+  // View I as registration reads it, on the grid of the run's map I (the weighted methods' map
+  // and its mapper only when one of them runs). Every result is assessed on its map, the peers' too.
+  perception::ReferenceView reference_;
+  std::vector<Eigen::Vector3d> returns_i_;  // the peers' target: scan I's returns in the world
 };
 
 }  // namespace ambler::eval

@@ -606,11 +606,7 @@ perception::ScanToMapConfig MapSpec::scanToMapConfig() const {
   return c;
 }
 
-perception::LocusConfig locusConfig(const Scenario& sc) {
-  perception::LocusConfig c = sc.map->scanToMapConfig().locus;
-  c.sensor = sc.sensor;
-  return c;
-}
+perception::LocusConfig locusConfig(const Scenario& sc) { return sc.map->scanToMapConfig().locus; }
 
 bool covarianceCalibrated(MatchMethod m, const perception::SensorModel& sensor) {
   return (m == MatchMethod::IconicWeighted || m == MatchMethod::FeaturesIconicWeighted) && sensor.quantization_m == 0;

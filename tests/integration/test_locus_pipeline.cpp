@@ -202,7 +202,7 @@ TEST(LocusPipeline, LanesGiveTheScalarSearchsBits) {
     lanes.footprint_sigma = rpy.x() != 0;  // the composite's σ (its own table along scanlines) in one pose
     perception::LocusConfig scalar = lanes;
     scalar.vectorized = false;
-    const perception::LocusMapper fast(image, &edges, lanes), slow(image, &edges, scalar);
+    const perception::LocusMapper fast(image, sensor, &edges, lanes), slow(image, sensor, &edges, scalar);
     for (const auto isa : {perception::LaneIsa::Avx512, perception::LaneIsa::Avx2}) {
       const perception::LaneIsaCap cap(isa);
       const auto active = perception::LocusMapper::laneIsa();

@@ -70,14 +70,13 @@ struct WeightedTrial {
                 ScanToMapConfig map_config, std::uint64_t key_i, std::uint64_t key_j) {
     map_config.locus.footprint_sigma = true;
     locus = map_config.locus;
-    locus.sensor = sensor;
     map_i = scanToMap(scanner.scan(T_I, key_i).image, sensor, T_I, grid, map_config);
-    source.emplace(map_i.image, &*map_i.edges, locus);
+    source.emplace(map_i.image, sensor, &*map_i.edges, locus);
     image_j = scanner.scan(T_J, key_j).image;
     image_j.T_WS = believed;
     unwrapRanges(image_j, sensor);
     edges_j = detectRangeEdges(image_j, sensor, map_config.gnc);
-    mapper.emplace(image_j, &edges_j, locus);
+    mapper.emplace(image_j, sensor, &edges_j, locus);
     truth = vectorFromPose(believed * T_J.inverse());
     IconicOptions options;
     options.map1_source = &*source;

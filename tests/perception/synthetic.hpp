@@ -112,4 +112,18 @@ inline perception::RangeImage capsImage(const Caps& caps, const Eigen::Isometry3
   return img;
 }
 
+// Whether two maps are the same bits: every cell's state, elevation, σ and shadow ceiling (NaN
+// equal to NaN).
+inline bool sameBits(const perception::ElevationMap& a, const perception::ElevationMap& b) {
+  const auto same = [](const perception::Raster<float>& x, const perception::Raster<float>& y) {
+    return x.rows() == y.rows() && x.cols() == y.cols() &&
+           ((x.array() == y.array()) || (x.array().isNaN() && y.array().isNaN())).all();
+  };
+  if (a.grid().rows != b.grid().rows || a.grid().cols != b.grid().cols) return false;
+  for (int r = 0; r < a.grid().rows; ++r)
+    for (int c = 0; c < a.grid().cols; ++c)
+      if (a.stateAt(r, c) != b.stateAt(r, c)) return false;
+  return same(a.elevation(), b.elevation()) && same(a.sigma(), b.sigma()) && same(a.shadowCeiling(), b.shadowCeiling());
+}
+
 }  // namespace ambler::test

@@ -90,7 +90,7 @@ struct CapsScene {
   // reference to the image, which lives as long as the scene).
   LocusMapper mapper(const Eigen::Isometry3d& believed) {
     image.T_WS = believed;
-    return LocusMapper(image, &edges, config);
+    return LocusMapper(image, erim, &edges, config);
   }
   // ν that corrects the believed pose to the truth: T_WS = exp(ν)⁻¹·believed.
   PoseVector correction(const Eigen::Isometry3d& believed) const { return vectorFromPose(believed * T_WS.inverse()); }
@@ -158,7 +158,7 @@ TEST(Acceptance, APlaneIsDegenerate) {
   for (int r = 0; r < map1.grid().rows; ++r)
     for (int c = 0; c < map1.grid().cols; ++c) map1.setKnown(r, c, 0.f, 1e-3f);
   const RangeImage image = test::planeImage(plane, T);
-  const LocusMapper m(image, nullptr, LocusConfig{});
+  const LocusMapper m(image, SensorModel{}, nullptr);
   const Assessment a = assessRegistration(map1, m, PoseVector::Zero(), T, nullptr, nullptr, wide());
   EXPECT_FALSE(a.accepted);
   EXPECT_TRUE(a.degenerate);
@@ -246,39 +246,43 @@ TEST(Acceptance, AStallShortOfTheMinimumIsRefused) {
 }
 
 // features+iconic_weighted: its iconic stage reads the weighted map I (σ_z with the footprint's
-// term), its feature stage the plain one, and map J made with config.feature_locus: the features
-// are those of the plain maps. A feature map on another grid is refused.
+// term), its feature stage the plain one, and map J made with the plain locus settings: the
+// features are those of the plain maps. A weighted method against a view without its weighted
+// map is refused.
 TEST(Verification, TheWeightedTwoStageMethodsFeaturesComeFromThePlainMaps) {
+  using test::sameBits;
   CapsScene s;
   const Eigen::Isometry3d believed = s.T_WS * Eigen::Translation3d(0.05, -0.03, 0.02);
-  const RangeImage image1 = test::capsImage(s.caps, s.T1);
-  const Raster<std::uint8_t> edges1 = detectRangeEdges(image1, SensorModel{});
+  ScanMap scan_i;
+  scan_i.image = test::capsImage(s.caps, s.T1);
+  scan_i.edges = detectRangeEdges(scan_i.image, s.erim);
+  scan_i.sensor = s.erim;
   const MapGrid grid = s.map1.grid();
   RegistrationConfig config;
   config.acceptance = wide();
-  config.feature_locus = config.locus;
-  config.locus.footprint_sigma = true;
-  const ElevationMap plain = LocusMapper(image1, &edges1, *config.feature_locus).map(grid);
-  const ElevationMap weighted = LocusMapper(image1, &edges1, config.locus).map(grid);
-  RangeImage image2 = s.image;
-  image2.T_WS = believed;
-  const MapGrid grid_j = believedGrid(grid, s.T1, believed);
-  const RegistrationResult r = registerViews(weighted, image2, &s.edges, grid_j, RegistrationMethod::FeaturesIconicWeighted,
-                                             config, nullptr, &plain);
+  const ReferenceView view_i = referenceView(scan_i, grid, config, true);
+  LocusConfig with_footprint = config.locus;
+  with_footprint.footprint_sigma = true;
+  const ElevationMap plain = LocusMapper(scan_i.image, s.erim, &*scan_i.edges, config.locus).map(grid);
+  const ElevationMap weighted = LocusMapper(scan_i.image, s.erim, &*scan_i.edges, with_footprint).map(grid);
+  ASSERT_TRUE(view_i.weighted.has_value());
+  EXPECT_TRUE(sameBits(view_i.map, plain));
+  EXPECT_TRUE(sameBits(*view_i.weighted, weighted));
+  ScanMap scan_j;
+  scan_j.image = s.image;
+  scan_j.edges = s.edges;
+  scan_j.sensor = s.erim;
+  const RegistrationResult r =
+      registerViews(view_i, scan_j, believed, RegistrationMethod::FeaturesIconicWeighted, config);
   const std::vector<Feature> expected = extractFeatures(plain, config.features);
   ASSERT_EQ(r.features_i.size(), expected.size());
   for (std::size_t k = 0; k < expected.size(); ++k) EXPECT_EQ(r.features_i[k].position, expected[k].position);
-  const LocusMapper mapper_j(image2, &s.edges, *config.feature_locus, grid_j.T_WM);
+  RangeImage image2 = s.image;
+  image2.T_WS = believed;
+  const MapGrid grid_j = believedGrid(grid, s.T1, believed);
+  const LocusMapper mapper_j(image2, s.erim, &s.edges, config.locus, grid_j.T_WM);
   ASSERT_TRUE(r.map_j.has_value());
-  const ElevationMap plain_j = mapper_j.map(grid_j);
-  ASSERT_EQ(r.map_j->elevation().size(), plain_j.elevation().size());
-  long differ = 0;  // cells whose elevation or σ_z is not bit-identical (NaN equal to NaN)
-  for (long k = 0; k < plain_j.elevation().size(); ++k)
-    for (const auto* m : {&r.map_j->elevation(), &r.map_j->sigma()}) {
-      const float a = m->data()[k], b = (m == &r.map_j->elevation() ? plain_j.elevation() : plain_j.sigma()).data()[k];
-      differ += !(a == b || (std::isnan(a) && std::isnan(b)));
-    }
-  EXPECT_EQ(differ, 0);
+  EXPECT_TRUE(sameBits(*r.map_j, mapper_j.map(grid_j)));
   // The weighted refinement finds the truth (the caps' 5 mm of test_iconic) and is believed.
   const PoseError e = poseError(poseFromVector(s.correction(believed)), poseFromVector(r.nu));
   EXPECT_LT(e.translation_m, 5e-3);
@@ -286,10 +290,10 @@ TEST(Verification, TheWeightedTwoStageMethodsFeaturesComeFromThePlainMaps) {
   // The corrected pose of sensor J is ν's one conversion, exp(ν)⁻¹·believed, bit for bit.
   EXPECT_TRUE(r.correction.matrix() == poseFromVector(r.nu).inverse().matrix());
   EXPECT_TRUE(r.corrected_WS.matrix() == (poseFromVector(r.nu).inverse() * believed).matrix());
-  const ElevationMap other(MapGrid::covering(-2, 2, 0, 4, 0.1));
-  EXPECT_THROW(registerViews(weighted, image2, &s.edges, grid_j, RegistrationMethod::FeaturesIconicWeighted, config,
-                             nullptr, &other),
+  const ReferenceView plain_only = referenceView(scan_i, grid, config, false);
+  EXPECT_THROW(registerViews(plain_only, scan_j, believed, RegistrationMethod::FeaturesIconicWeighted, config),
                std::invalid_argument);
+  EXPECT_NO_THROW(registerViews(plain_only, scan_j, believed, RegistrationMethod::Features, config));
 }
 
 // Verification on the caps with a planted wrong pairing: feature matching's T_F put 0.8 m, 0.6 m

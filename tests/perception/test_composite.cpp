@@ -227,7 +227,6 @@ ScanMap planeScan(const Eigen::Isometry3d& T_WS) {
 
 LocusConfig compositeLocus(bool roughness) {
   LocusConfig c;
-  c.sensor = planeSensor();
   c.roughness = roughness;
   return c;
 }
@@ -236,16 +235,7 @@ ViewPlacement at(const Eigen::Isometry3d& T_WS, PlacementHow how = PlacementHow:
 // Left out, though its pose is one the view maps well from: the pose must not be used.
 ViewPlacement leftOut(const Eigen::Isometry3d& T_WS) { return {PlacementHow::LeftOut, T_WS, {}}; }
 
-bool sameBits(const ElevationMap& a, const ElevationMap& b) {
-  const auto same = [](const Raster<float>& x, const Raster<float>& y) {
-    return x.rows() == y.rows() && x.cols() == y.cols() &&
-           ((x.array() == y.array()) || (x.array().isNaN() && y.array().isNaN())).all();
-  };
-  for (int r = 0; r < a.grid().rows; ++r)
-    for (int c = 0; c < a.grid().cols; ++c)
-      if (a.stateAt(r, c) != b.stateAt(r, c)) return false;
-  return same(a.elevation(), b.elevation()) && same(a.sigma(), b.sigma()) && same(a.shadowCeiling(), b.shadowCeiling());
-}
+using test::sameBits;
 
 // With σ's roughness part off nothing is shared (σ_rough = 0), so two views merge by eq. 9 itself:
 // each cell both know is (σ₂²·z₁ + σ₁²·z₂)/(σ₁² + σ₂²) with σ² = σ₁²σ₂²/(σ₁² + σ₂²), z_k and σ_k

@@ -48,8 +48,9 @@ TEST(Iconic, GradientMatchesFiniteDifferences) {
   const RangeImage image2 = domeImage(dome, sensorPose({0.5, -3, 3}, {0, -30 * kDeg, 5 * kDeg}));
   LocusConfig config;
   config.epsilon_rad = 1e-12;
-  config.sensor.noise_k = 0, config.sensor.quantization_m = 0;
-  const LocusMapper mapper(image2, nullptr, config);
+  SensorModel noise_free;
+  noise_free.noise_k = 0, noise_free.quantization_m = 0;
+  const LocusMapper mapper(image2, noise_free, nullptr, config);
   const ElevationMap map1 = domeMap(dome);
   PoseVector nu;
   nu << 0.01, -0.02, 0.03, 0.05, -0.04, 0.02;
@@ -78,8 +79,9 @@ TEST(Iconic, ErrorAtTheTruthIsTheInterpolationsOnly) {
   const Dome dome;
   const RangeImage image2 = domeImage(dome, sensorPose({0.5, -3, 3}, {0, -30 * kDeg, 5 * kDeg}));
   LocusConfig config;
-  config.sensor.noise_k = 0, config.sensor.quantization_m = 0;
-  const LocusMapper mapper(image2, nullptr, config);
+  SensorModel noise_free;
+  noise_free.noise_k = 0, noise_free.quantization_m = 0;
+  const LocusMapper mapper(image2, noise_free, nullptr, config);
   const IconicError e = iconicError(domeMap(dome), mapper, PoseVector::Zero());
   ASSERT_GT(e.overlap, 1000);
   EXPECT_LT(std::sqrt(e.E / e.overlap), 2e-3);
@@ -110,9 +112,7 @@ TEST(Iconic, DescentAndLevenbergMarquardtRecoverTheTransform) {
   const RangeImage image2 = capsImage(caps, sensorPose({0.3, -2.5, 3}, {0, -32 * kDeg, -4 * kDeg}));
   const Raster<std::uint8_t> edges2 = detectRangeEdges(image2, ideal);
   const Eigen::Isometry3d T_WM2 = mapFrame({0.2, -0.1, 0.05}, 3 * kDeg);
-  LocusConfig config;
-  config.sensor = ideal;
-  const LocusMapper mapper(image2, &edges2, config, T_WM2);
+  const LocusMapper mapper(image2, ideal, &edges2, LocusConfig{}, T_WM2);
   const Eigen::Isometry3d truth = T_WM2.inverse();
   PoseVector start = vectorFromPose(truth);
   start += (PoseVector() << 0.005, -0.005, 0.03, 0.1, -0.08, 0.03).finished();
@@ -147,8 +147,9 @@ TEST(Iconic, PlaneIsDegenerateInXYAndYaw) {
   const test::Plane plane{0.0, 0.0, 0.0};
   const RangeImage image2 = test::planeImage(plane, sensorPose({0.3, -2.5, 3}, {0, -32 * kDeg, -4 * kDeg}));
   LocusConfig config;
-  config.sensor.noise_k = 0, config.sensor.quantization_m = 0;
-  const LocusMapper mapper(image2, nullptr, config);
+  SensorModel noise_free;
+  noise_free.noise_k = 0, noise_free.quantization_m = 0;
+  const LocusMapper mapper(image2, noise_free, nullptr, config);
   ElevationMap map1(MapGrid::covering(-3, 3, 1.5, 8, 0.1));
   for (int r = 0; r < map1.grid().rows; ++r)
     for (int c = 0; c < map1.grid().cols; ++c) map1.setKnown(r, c, 0.0f, 1e-3f);
@@ -216,9 +217,7 @@ TEST(Iconic, WeightedCostDividesEachResidualByItsSigma) {
   for (int r = 0; r < p.map1.grid().rows; ++r)
     for (int c = 0; c < p.map1.grid().cols; ++c)
       if (p.map1.stateAt(r, c) == CellState::Known) p.map1.sigma()(r, c) = 1.0f;
-  LocusConfig config;
-  config.sensor = p.ideal;
-  const LocusMapper mapper(p.image2, nullptr, config);
+  const LocusMapper mapper(p.image2, p.ideal, nullptr);
   PoseVector nu;
   nu << 0.005, -0.005, 0.03, 0.1, -0.08, 0.03;
   const IconicError plain = iconicError(p.map1, mapper, nu), weighted = iconicError(p.map1, mapper, nu, true, 0, nullptr, 1, true);
@@ -238,12 +237,10 @@ TEST(Iconic, WeightedCostDividesEachResidualByItsSigma) {
 // naive one in every direction.
 TEST(Iconic, WeightedCovarianceOfLinesSharingNoPixelIsTheInverseInformation) {
   CapsPair p;
-  LocusConfig config;
-  config.sensor = p.ideal;
-  const LocusMapper mapper(p.image2, nullptr, config);
+  const LocusMapper mapper(p.image2, p.ideal, nullptr);
   const Eigen::Isometry3d T1 = sensorPose({0, -3, 3}, {0, -30 * kDeg, 0});
   const RangeImage image1 = capsImage(p.caps, T1);
-  const LocusMapper source(image1, nullptr, config);
+  const LocusMapper source(image1, p.ideal, nullptr);
   ElevationMap sparse(p.map1.grid());
   for (int r = 0; r < p.map1.grid().rows; r += 6)
     for (int c = 0; c < p.map1.grid().cols; c += 6)
@@ -279,16 +276,11 @@ namespace {
 
 // The recovery test's pair (GNC edges in image 2, map 2's frame moved by T_WM2) and its start, 0.14 m
 // and 1.8° off the truth.
-LocusConfig locusFor(const SensorModel& sensor) {
-  LocusConfig config;
-  config.sensor = sensor;
-  return config;
-}
 struct CapsRecovery {
   CapsPair pair;
   Raster<std::uint8_t> edges2 = detectRangeEdges(pair.image2, pair.ideal);
   Eigen::Isometry3d T_WM2 = mapFrame({0.2, -0.1, 0.05}, 3 * kDeg);
-  LocusMapper mapper{pair.image2, &edges2, locusFor(pair.ideal), T_WM2};
+  LocusMapper mapper{pair.image2, pair.ideal, &edges2, LocusConfig{}, T_WM2};
   PoseVector truth = vectorFromPose(T_WM2.inverse());
   PoseVector start = truth + (PoseVector() << 0.005, -0.005, 0.03, 0.1, -0.08, 0.03).finished();
 };

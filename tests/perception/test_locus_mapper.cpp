@@ -19,11 +19,12 @@ using test::planeImage;
 
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-LocusConfig noiseFree() {
-  LocusConfig c;
-  c.sensor.noise_k = 0;
-  c.sensor.quantization_m = 0;
-  return c;
+// The ERIM without range noise or quantisation.
+SensorModel noiseFree() {
+  SensorModel s;
+  s.noise_k = 0;
+  s.quantization_m = 0;
+  return s;
 }
 
 // The angle between the beam and the plane at the point the sensor sees above (x, y).
@@ -49,7 +50,7 @@ TEST_P(LocusPlane, MapsTiltedPlanesToTwoMillimetres) {
   for (const Eigen::Vector3d& rpy : {Eigen::Vector3d(0, -30 + extra, 0), Eigen::Vector3d(3, -35 + extra, 25)}) {
     const Eigen::Vector3d sensor(0.3, -6, 3 + 6 * std::abs(plane.b) + 0.3 * std::abs(plane.a));
     const auto img = planeImage(plane, sensorPose(sensor, rpy * kDeg));
-    const LocusMapper mapper(img, nullptr, noiseFree());
+    const LocusMapper mapper(img, noiseFree(), nullptr);
     const auto grid = MapGrid::covering(-8, 8, -4, 12, 0.1);
     const ElevationMap map = mapper.map(grid);
     int checked = 0;
@@ -82,26 +83,26 @@ INSTANTIATE_TEST_SUITE_P(Tilts, LocusPlane,
 TEST(LocusMapper, RefusesImagesItsTablesCannotDescribe) {
   const Plane plane{0.0, 0.0, 0.0};
   const auto img = planeImage(plane, sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}));
-  EXPECT_NO_THROW(LocusMapper(img, nullptr));
+  EXPECT_NO_THROW(LocusMapper(img, SensorModel{}, nullptr));
   auto uneven = img;
   uneven.phi[10] += 0.1 * (img.phi[0] - img.phi[1]);
-  EXPECT_THROW(LocusMapper(uneven, nullptr), std::invalid_argument);
+  EXPECT_THROW(LocusMapper(uneven, SensorModel{}, nullptr), std::invalid_argument);
   auto reversed = img;
   std::reverse(reversed.theta.begin(), reversed.theta.end());
-  EXPECT_THROW(LocusMapper(reversed, nullptr), std::invalid_argument);
+  EXPECT_THROW(LocusMapper(reversed, SensorModel{}, nullptr), std::invalid_argument);
   const Raster<std::uint8_t> small = Raster<std::uint8_t>::Zero(img.rows() - 1, img.cols());
-  EXPECT_THROW(LocusMapper(img, &small), std::invalid_argument);
+  EXPECT_THROW(LocusMapper(img, SensorModel{}, &small), std::invalid_argument);
   const auto tiny = RangeImage::blank(1, 8, 0.5, 0.5);
-  EXPECT_THROW(LocusMapper(tiny, nullptr), std::invalid_argument);
+  EXPECT_THROW(LocusMapper(tiny, SensorModel{}, nullptr), std::invalid_argument);
   Eigen::Isometry3d tilted = Eigen::Isometry3d::Identity();
   tilted.linear() = Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX()).toRotationMatrix();
-  EXPECT_THROW(LocusMapper(img, nullptr, LocusConfig{}, tilted), std::invalid_argument);
+  EXPECT_THROW(LocusMapper(img, SensorModel{}, nullptr, LocusConfig{}, tilted), std::invalid_argument);
 }
 
 TEST(LocusMapper, ResolutionIndependent) {
   const Plane plane{0.1, 0.2, 0.0};
   const auto img = planeImage(plane, sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}));
-  const LocusMapper mapper(img, nullptr, noiseFree());
+  const LocusMapper mapper(img, noiseFree(), nullptr);
   const auto coarse = mapper.map(MapGrid::covering(-4, 4, -2, 8, 0.10));
   const auto fine = mapper.map(MapGrid::covering(-4, 4, -2, 8, 0.02));
   int shared = 0;
@@ -129,7 +130,7 @@ TEST(LocusMapper, KnownExactlyWhereTheImageCoversTheSurface) {
   for (const Eigen::Vector3d& rpy : {Eigen::Vector3d(0, -30, 0), Eigen::Vector3d(20, -35, 25), Eigen::Vector3d(-15, -25, -40)}) {
     const Eigen::Isometry3d T = sensorPose({0.3, -6, 3}, rpy * kDeg);
     const auto img = planeImage(plane, T);
-    const LocusMapper mapper(img, nullptr, noiseFree());
+    const LocusMapper mapper(img, noiseFree(), nullptr);
     const auto grid = MapGrid::covering(-14, 14, -6, 16, 0.1);
     const ElevationMap map = mapper.map(grid);
     const double dphi = img.phi[0] - img.phi[1], dtheta = img.theta[1] - img.theta[0];
@@ -170,11 +171,11 @@ TEST(LocusMapper, KnownExactlyWhereTheImageCoversTheSurface) {
 TEST(LocusMapper, BisectionAndDefaultStepsAgree) {
   const Plane plane{0.1, 0.2, 0.0};
   const auto img = planeImage(plane, sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}));
-  LocusConfig halving = noiseFree();
+  LocusConfig halving;
   halving.bisection = true;
   const auto grid = MapGrid::covering(-4, 4, -2, 8, 0.10);
-  const auto fast = LocusMapper(img, nullptr, noiseFree()).map(grid);
-  const auto paper = LocusMapper(img, nullptr, halving).map(grid);
+  const auto fast = LocusMapper(img, noiseFree(), nullptr).map(grid);
+  const auto paper = LocusMapper(img, noiseFree(), nullptr, halving).map(grid);
   int known = 0;
   for (int r = 0; r < grid.rows; ++r)
     for (int c = 0; c < grid.cols; ++c) {
@@ -191,10 +192,10 @@ TEST(LocusMapper, BisectionAndDefaultStepsAgree) {
 TEST(LocusMapper, UnreturnedPixelsNeverMakeKnownCells) {
   const Plane plane{0, 0, 0};
   auto img = planeImage(plane, sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}));
-  const auto full = LocusMapper(img, nullptr, noiseFree()).map(MapGrid::covering(-4, 4, -4, 8, 0.05));
+  const auto full = LocusMapper(img, noiseFree(), nullptr).map(MapGrid::covering(-4, 4, -4, 8, 0.05));
   for (int r = 30; r < 34; ++r)
     for (int c = 120; c < 130; ++c) img.range(r, c) = std::numeric_limits<float>::quiet_NaN();
-  const LocusMapper mapper(img, nullptr, noiseFree());
+  const LocusMapper mapper(img, noiseFree(), nullptr);
   const auto holed = mapper.map(full.grid());
   int lost = 0;
   for (int r = 0; r < full.grid().rows; ++r)
@@ -222,7 +223,7 @@ TEST(LocusMapper, UnreturnedPixelsNeverMakeKnownCells) {
 TEST(LocusMapper, GeneralLinesMeetThePlaneWhereTheClosedFormSays) {
   const Plane plane{0.15, -0.1, 0.2};
   const auto img = planeImage(plane, sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}));
-  const LocusMapper mapper(img, nullptr, noiseFree());
+  const LocusMapper mapper(img, noiseFree(), nullptr);
   for (double tilt : {0.0, 0.2, 0.4}) {
     const Eigen::Vector3d v = Eigen::Vector3d(std::sin(tilt), 0.3 * std::sin(tilt), std::cos(tilt)).normalized();
     const Eigen::Vector3d u(0.5, 2.0, 0.0);
@@ -236,7 +237,7 @@ TEST(LocusMapper, GeneralLinesMeetThePlaneWhereTheClosedFormSays) {
 TEST(LocusMapper, PolygonQueryLeavesOutsideCellsUnseen) {
   const Plane plane{0, 0, 0.1};
   const auto img = planeImage(plane, sensorPose({0, -6, 3}, {0, -30 * kDeg, 0}));
-  const LocusMapper mapper(img, nullptr, noiseFree());
+  const LocusMapper mapper(img, noiseFree(), nullptr);
   const std::vector<Eigen::Vector2d> triangle{{-1, 1}, {1, 1}, {0, 3}};
   const ElevationMap m = mapper.mapPolygon(triangle, 0.05);
   int inside = 0;
@@ -271,9 +272,9 @@ TEST(LocusMapper, LanesHandBackWhatTheyCannotFinish) {
   perception::Raster<std::uint8_t> edges = perception::Raster<std::uint8_t>::Zero(img.rows(), img.cols());
   for (int r = 0; r < img.rows(); ++r)
     for (int c = (r * 13) % 17; c < img.cols(); c += 17) edges(r, c) = 1;
-  LocusConfig lanes = noiseFree(), scalar = noiseFree();
+  LocusConfig lanes, scalar;
   scalar.vectorized = false;
-  const LocusMapper fast(img, &edges, lanes), slow(img, &edges, scalar);
+  const LocusMapper fast(img, noiseFree(), &edges, lanes), slow(img, noiseFree(), &edges, scalar);
   for (const auto isa : {LaneIsa::Avx512, LaneIsa::Avx2}) {
     const LaneIsaCap cap(isa);
     for (const double cell : {0.03, 0.10, 0.25}) {

@@ -82,9 +82,7 @@ TEST(ScanToMap, YawedOffsetFrameHoldsThePlaneHeightsOfItsCells) {
   ASSERT_TRUE(out.map.grid().sameAs(grid));
   EXPECT_FALSE(out.edges.has_value());
 
-  LocusConfig world_config = geometryOnly().locus;
-  world_config.sensor = sensor;
-  const LocusMapper world(img, nullptr, world_config);
+  const LocusMapper world(img, sensor, nullptr, geometryOnly().locus);
   int known = 0, near_field = 0;
   for (int r = 0; r < grid.rows; ++r)
     for (int c = 0; c < grid.cols; ++c) {
@@ -94,7 +92,7 @@ TEST(ScanToMap, YawedOffsetFrameHoldsThePlaneHeightsOfItsCells) {
       const double z = out.map.elevation()(r, c);
       const LocusHit ref = world.elevationAt(p.x(), p.y());
       ASSERT_EQ(ref.state, CellState::Known) << "cell " << r << "," << c;
-      const double tol = searchTolerance(world_config, dzdphi(kSensor, p.x(), p.y(), ref.point.z()), z);
+      const double tol = searchTolerance(geometryOnly().locus, dzdphi(kSensor, p.x(), p.y(), ref.point.z()), z);
       EXPECT_NEAR(z, ref.point.z() - origin.z(), tol) << "cell " << r << "," << c;
       const Eigen::Vector3d on_plane(p.x(), p.y(), kPlane.z(p.x(), p.y()));
       if (grazingAngle(kPlane, kSensor.translation(), on_plane) < 10 * kDeg ||
@@ -149,9 +147,7 @@ TEST(ScanToMap, MapAtPoseIsScanToMapAtThatPose) {
   const Eigen::Isometry3d other = sensorPose({0.5, -5.5, 3.4}, Eigen::Vector3d(2, -30, 25) * kDeg);
   const MapGrid grid = MapGrid::covering(-4, 4, -2, 8, 0.1, mapFrame({0.5, -0.25, 0.1}, 10 * kDeg));
   const ScanMap at_first = scanToMap(img, sensor, kSensor, grid);
-  LocusConfig locus;
-  locus.sensor = sensor;
-  const ElevationMap again = mapAtPose(at_first, other, grid, locus);
+  const ElevationMap again = mapAtPose(at_first, other, grid, LocusConfig{});
   const ElevationMap direct = scanToMap(img, sensor, other, grid).map;
   ASSERT_GT(direct.count(CellState::Known), 1000);
   for (int r = 0; r < grid.rows; ++r)
@@ -184,14 +180,12 @@ TEST(ScanToMap, RefusesTiltedFramesEmptyGridsAndAForeignFrame) {
   EXPECT_THROW(scanToMap(img, bad, kSensor, MapGrid::covering(-2, 2, 0, 4, 0.1)), std::invalid_argument);
 
   // A mapper maps only grids of its own frame.
-  LocusConfig config;
-  config.sensor = sensor;
   const Eigen::Isometry3d T_A = mapFrame({1, 2, 0.5}, 0.4);
-  const LocusMapper in_a(img, nullptr, config, T_A);
+  const LocusMapper in_a(img, sensor, nullptr, LocusConfig{}, T_A);
   EXPECT_NO_THROW(in_a.map(MapGrid::covering(-1, 1, 0, 2, 0.1, T_A)));
   EXPECT_THROW(in_a.map(MapGrid::covering(-1, 1, 0, 2, 0.1)), std::invalid_argument);
   EXPECT_THROW(in_a.map(MapGrid::covering(-1, 1, 0, 2, 0.1, mapFrame({1, 2, 0.5}, 0.41))), std::invalid_argument);
-  const LocusMapper in_world(img, nullptr, config);
+  const LocusMapper in_world(img, sensor, nullptr);
   EXPECT_THROW(in_world.map(MapGrid::covering(-1, 1, 0, 2, 0.1, T_A)), std::invalid_argument);
 }
 

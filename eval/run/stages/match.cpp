@@ -65,12 +65,10 @@ struct Registered {
 void featurePictures(const RunState& s) {
   // The features registration extracts: from each view's map as registration maps it
   // (registrationConfig: the samples at edges trusted), which the run's map may not be.
-  const perception::LocusConfig locus = registrationConfig(s.scenario).locus;
+  const perception::RegistrationConfig config = registrationConfig(s.scenario);
   for (int k = 0; k < int(s.views.size()); ++k) {
     const perception::ScanMap& view = *s.views[k].locus;
-    const perception::MapGrid& grid = view.map.grid();
-    const perception::ElevationMap map =
-        perception::LocusMapper(view.image, view.edges ? &*view.edges : nullptr, locus, grid.T_WM).map(grid);
+    const perception::ElevationMap map = perception::referenceView(view, view.map.grid(), config, false).map;
     writeFeaturesPicture(s.out / "matching", k, map, perception::extractFeatures(map),
                          s.scenario.name + ": " + viewName(k) + " locus map");
   }

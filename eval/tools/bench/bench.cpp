@@ -176,12 +176,12 @@ struct MapTimes {
 };
 
 MapTimes timeMaps(const perception::RangeImage& image, const perception::Raster<std::uint8_t>& edges,
-                  const perception::LocusConfig& locus, const perception::MapGrid& grid, perception::LaneIsa isa,
-                  int repetitions) {
-  const perception::LocusMapper mapper(image, &edges, locus);
+                  const perception::SensorModel& sensor, const perception::LocusConfig& locus,
+                  const perception::MapGrid& grid, perception::LaneIsa isa, int repetitions) {
+  const perception::LocusMapper mapper(image, sensor, &edges, locus);
   perception::LocusConfig scalar_config = locus;
   scalar_config.vectorized = false;
-  const perception::LocusMapper scalar(image, &edges, scalar_config);
+  const perception::LocusMapper scalar(image, sensor, &edges, scalar_config);
   const double cells = double(grid.cells());
   MapTimes m;
   mapper.map(grid, &m.lane_cells);
@@ -234,7 +234,6 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   const perception::RangeImage& image = base.image;
   const perception::Raster<std::uint8_t>& edges = *base.edges;
   perception::LocusConfig locus;
-  locus.sensor = sensor;
   locus.epsilon_rad = region.epsilon_rad;
 
   nlohmann::ordered_json j, one, all, speedup, cart, scalar_one, avx2_one, lanes;
@@ -249,7 +248,7 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
     MapSpec spec = region;
     spec.cell_m = cell;
     const perception::MapGrid grid = spec.grid();
-    const MapTimes m = timeMaps(image, edges, locus, grid, isa, opt.repetitions);
+    const MapTimes m = timeMaps(image, edges, sensor, locus, grid, isa, opt.repetitions);
     const double cells = double(grid.cells()), t1 = m.t1, ta = m.ta, sp = m.sp, ts = m.ts, t2 = m.t2, tc = m.tc;
     const long lane_cells = m.lane_cells;
     char key[16];
@@ -275,7 +274,7 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
   {
     tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
     edges_s = timeMedian(opt.repetitions, [&] { perception::detectRangeEdges(image, sensor); });
-    setup_s = timeMedian(opt.repetitions, [&] { perception::LocusMapper(image, &edges, locus); });
+    setup_s = timeMedian(opt.repetitions, [&] { perception::LocusMapper(image, sensor, &edges, locus); });
   }
   progress.step("edge detection and mapper tables");
   progress.finish();

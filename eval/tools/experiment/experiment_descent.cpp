@@ -114,16 +114,13 @@ std::vector<std::vector<std::string>> registerPair(const Scenario& scenario, con
   // Map I as registration maps it (eval/run/pair_registration.cpp), image J at the believed pose.
   const perception::ScanMap& view_i = *vi.locus;
   const perception::ScanMap& view_j = *vj.locus;
-  const perception::ElevationMap map_i =
-      perception::LocusMapper(view_i.image, view_i.edges ? &*view_i.edges : nullptr, config.locus,
-                              view_i.map.grid().T_WM)
-          .map(view_i.map.grid());
+  const perception::ElevationMap map_i = perception::referenceView(view_i, view_i.map.grid(), config, false).map;
   const Eigen::Isometry3d T_IJ = vi.T_WS.inverse() * vj.T_WS;  // the truth, for scoring only
   const Eigen::Isometry3d T_0 = spec.initialEstimate(T_IJ, sc.seed, i, j);
   const Eigen::Isometry3d believed_WS = vi.T_WS * T_0;
   perception::RangeImage image = view_j.image;
   image.T_WS = believed_WS;
-  const perception::LocusMapper mapper(image, view_j.edges ? &*view_j.edges : nullptr, config.locus);
+  const perception::LocusMapper mapper(image, view_j.sensor, view_j.edges ? &*view_j.edges : nullptr, config.locus);
   const perception::PoseError start = perception::poseError(T_IJ, T_0);
   detail = terrain + " seed " + std::to_string(sc.seed) + " (start " + number(100 * start.translation_m) + " cm " +
            number(start.rotation_deg) + " deg):";
