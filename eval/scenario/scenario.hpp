@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "perception/footfall.hpp"
+#include "perception/odometry.hpp"
 #include "perception/registration.hpp"
 #include "perception/map_grid.hpp"
 #include "perception/scan_to_map.hpp"
@@ -146,6 +147,40 @@ struct LegSpec {
   double load_n = 4000;
 };
 
+// A traverse (docs/scenario.md, "traverse"; docs/traverse.md): the rover walks a path, stops
+// every stop_spacing_m, scans, maps, registers the new view and merges it into a running
+// composite. It generates its views: `views:` is refused beside it.
+enum class TraverseRegister : std::uint8_t {
+  Composite,  // the new view against the running composite (map to model)
+  Previous,   // against the previous stop's view
+  None,       // no registration: dead reckoning alone
+};
+const char* traverseRegisterName(TraverseRegister r);
+
+// The simulated odometry's error per step of horizontal length d (docs/traverse.md): each
+// horizontal component of the measured displacement is (1 + translation_bias)·true +
+// N(0, (translation_sigma_per_m·d)²), the height change true + N(0, (translation_sigma_per_m·d)²),
+// the turn true + heading_bias_deg_per_m·d + N(0, (heading_sigma_deg_per_m·d)²). Seeded by the
+// scenario's seed and the stop.
+struct TraverseOdometry {
+  double translation_sigma_per_m = 0.02;
+  double heading_sigma_deg_per_m = 0.5;
+  double translation_bias = 0.0;        // scale error of the measured displacement (slip: < 0)
+  double heading_bias_deg_per_m = 0.0;  // a systematic turn
+};
+
+struct TraverseSpec {
+  // The path in the terrain's frame: at least two points (path.waypoints_xy_m, or path.start_xy_m,
+  // heading_deg and length_m, which make two).
+  std::vector<Eigen::Vector2d> waypoints_xy_m;
+  double stop_spacing_m = 1.0;
+  double footprint_radius_m = 1.0;  // the body's ground plane is fitted over this disk
+  perception::Mount mount;
+  TraverseOdometry odometry;
+  TraverseRegister reg = TraverseRegister::Composite;
+  MatchMethod method = MatchMethod::FeaturesLm;  // features+iconic_lm; any matching method
+};
+
 struct Scenario {
   std::filesystem::path file;       // where it was loaded from (for messages and relative paths)
   std::string name;
@@ -159,13 +194,14 @@ struct Scenario {
   std::optional<MergeSpec> merge;        // absent: no composite
   std::optional<FootfallSpec> footfall;  // absent: no footfall evaluation
   std::optional<LegSpec> leg;            // absent: no leg (needs footfall)
+  std::optional<TraverseSpec> traverse;  // absent: the views are `views:`
 };
 
 // What the matchers are told (docs/matching.md): the locus settings and sensor model of the map
 // section, and the rover's prior on its dead-reckoning error (matching.prior; by default what the
 // initial_error key's bounds allow: 3√3 m and a 55.8° turn), not the error itself.
 perception::RegistrationConfig registrationConfig(const Scenario& sc);
-// The locus settings of the map section with the scenario's sensor model: how any stage maps a scan.
+// The locus settings of the map section: how any stage maps a scan (each scan brings its sensor).
 perception::LocusConfig locusConfig(const Scenario& sc);
 
 // Loads and validates a scenario. Throws ScenarioError naming the file and the key for a missing
