@@ -24,36 +24,6 @@ namespace ambler::eval::stages {
 
 namespace {
 
-nlohmann::ordered_json matrixJson(const Eigen::MatrixXd& m) {
-  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
-  for (int r = 0; r < m.rows(); ++r) {
-    nlohmann::ordered_json row = nlohmann::ordered_json::array();
-    for (int c = 0; c < m.cols(); ++c) row.push_back(m(r, c));
-    rows.push_back(row);
-  }
-  return rows;
-}
-
-// A map's features (docs/matching.md), in its map frame.
-nlohmann::ordered_json featuresJson(const std::vector<perception::Feature>& features) {
-  static const char* kTypes[] = {"point", "line", "region"};
-  nlohmann::ordered_json out = nlohmann::ordered_json::array();
-  for (const perception::Feature& f : features) {
-    nlohmann::ordered_json e;
-    e["type"] = kTypes[int(f.type)];
-    e["position_m"] = {f.position.x(), f.position.y(), f.position.z()};
-    if (f.type == perception::FeatureType::Line) {
-      e["direction"] = {f.direction.x(), f.direction.y(), f.direction.z()};
-      e["length_m"] = f.length_m;
-    }
-    e["extent_m"] = f.extent_m;
-    e["strength_per_m"] = f.strength;
-    e["cells"] = f.cells;
-    out.push_back(e);
-  }
-  return out;
-}
-
 // ---- Pictures (eval/pictures/match_figures.hpp), apart from the registration: they only read its results.
 struct Registered {
   std::string method;
@@ -98,61 +68,6 @@ void pairPictures(const RunState& s, int i, int j, const Eigen::Isometry3d& beli
 }
 // ---- End of the pictures.
 
-// The two-stage methods' verification (pair JSON "verification"): each hypothesis with its cost
-// and, for scoring only, where sensor J would be from its start and from its refinement.
-nlohmann::ordered_json verificationJson(const perception::RegistrationResult& reg, const Eigen::Isometry3d& T_IJ,
-                                        const Eigen::Isometry3d& T_WS_i, const Eigen::Isometry3d& believed_WS) {
-  nlohmann::ordered_json hs = nlohmann::ordered_json::array();
-  for (std::size_t k = 0; k < reg.hypotheses.size(); ++k) {
-    const perception::RegistrationHypothesis& h = reg.hypotheses[k];
-    // Scoring only: where sensor J would be from the start and from its refinement.
-    const auto error = [&](const perception::PoseVector& nu) {
-      return perception::poseError(T_IJ, T_WS_i.inverse() * perception::poseFromVector(nu).inverse() * believed_WS);
-    };
-    const perception::PoseError e0 = error(h.nu0), e1 = error(h.nu);
-    hs.push_back({{"start", h.start},
-                  {"stage", h.stage},
-                  {"D_m", h.D_m},
-                  {"iterations", h.iterations},
-                  {"cost", h.cost},
-                  {"chosen", int(k) == reg.chosen},
-                  {"start_translation_error_m", e0.translation_m},
-                  {"start_rotation_error_deg", e0.rotation_deg},
-                  {"translation_error_m", e1.translation_m},
-                  {"rotation_error_deg", e1.rotation_deg}});
-  }
-  return {{"common_lines", reg.common_lines}, {"hypotheses", hs}};
-}
-
-// The feature stage (pair JSON "feature_matching"); D_true_m, eq. 3 at the true transform, is
-// scoring only: whether a failure is the search's or the verification's.
-nlohmann::ordered_json featureMatchingJson(const perception::RegistrationResult& reg,
-                                           const perception::MapGrid& grid_j, const Eigen::Isometry3d& believed_WS,
-                                           const Eigen::Isometry3d& T_WS_j, const perception::FeatureMatchConfig& match) {
-  const perception::FeatureMatch& fm = *reg.feature_match;
-  nlohmann::ordered_json f;
-  f["features_i"] = featuresJson(reg.features_i);
-  f["features_j"] = featuresJson(reg.features_j);
-  f["T_WM_j"] = matrixJson(grid_j.T_WM.matrix());
-  f["found"] = fm.found;
-  f["D_m"] = fm.D;
-  f["D_initial_m"] = fm.D0;
-  // Eq. 3 at the true transform (world → believed world), and its pairing.
-  std::vector<std::pair<int, int>> true_pairs;
-  f["D_true_m"] = perception::featureDistanceSum(reg.features_i, reg.features_j, *reg.map_j,
-                                                 grid_j.T_WM.inverse() * believed_WS * T_WS_j.inverse(),
-                                                 match, &true_pairs);
-  f["pairs_true"] = true_pairs.size();
-  nlohmann::ordered_json pairs = nlohmann::ordered_json::array();
-  for (const auto& [a, b] : fm.pairs) pairs.push_back({a, b});
-  f["pairs"] = pairs;
-  f["rotation_sigma_deg"] = fm.rotation_sigma_deg;
-  f["nodes"] = fm.nodes;
-  f["hypotheses"] = fm.hypotheses;
-  f["exhausted"] = fm.exhausted;
-  return f;
-}
-
 // Fig. 5: map J's features moved into map I's frame by T_F (M_J → M_I: T_F⁻¹), over map I:
 // matching/pair_I_J_correspondence_METHOD.png.
 void writeCorrespondencePicture(const RunState& s, int i, int j, const std::string& name,
@@ -196,46 +111,21 @@ void run(RunState& s) {
       const perception::PoseError err = result.error, start = result.start;
       const bool success = isSuccess(err, spec);
       const std::string name = matchMethodName(method);
-      nlohmann::ordered_json pair;
-      pair["pair"] = {i, j};
-      pair["method"] = name;
-      pair["T_true"] = matrixJson(T_IJ.matrix());
-      pair["T_initial"] = matrixJson(T_0.matrix());
-      pair["T_estimated"] = matrixJson(T_est.matrix());
-      pair["translation_error_m"] = err.translation_m;
-      pair["rotation_error_deg"] = err.rotation_deg;
-      pair["success"] = success;
-      pair["iterations"] = reg.iterations;
-      pair["time_s"] = seconds;
-      // Of ν (world → believed world), rx ry rz tx ty tz; null where a direction is free or the
-      // method gives none (features alone).
-      const bool covariance = reg.ran_iconic && !res.degenerate;
-      pair["covariance"] = covariance ? matrixJson(res.covariance) : nlohmann::ordered_json(nullptr);
-      pair["degenerate"] = reg.ran_iconic && res.degenerate;
-      pair["free_directions"] = res.free_directions;
-      pair["overlap"] = res.overlap;
-      // The same of sensor J's pose in its own frame (what is scored), rx ry rz tx ty tz.
-      pair["covariance_pose"] = covariance && res.covariance.allFinite()
-                                    ? matrixJson(perception::sensorPoseCovariance(reg.nu, res.covariance, believed_WS))
-                                    : nlohmann::ordered_json(nullptr);
-      pair["covariance_calibrated"] = covariance && covarianceCalibrated(method, sc.sensor);
-      // The rover's verdict, made without truth, and how it scores against the truth.
       const perception::Assessment& a = reg.assessment;
-      pair["accepted"] = a.accepted;
-      pair["reject_reasons"] = a.reject_reasons;
-      pair["false_accept"] = a.accepted && !success;
-      pair["assessment"] = assessmentJson(a);
-      if (!reg.hypotheses.empty()) pair["verification"] = verificationJson(reg, T_IJ, vi.T_WS, believed_WS);
-      if (reg.feature_match) {
-        pair["feature_matching"] = featureMatchingJson(reg, grid_j, believed_WS, vj.T_WS, config.match);
-        writeCorrespondencePicture(s, i, j, name, reg);
-      }
-      nlohmann::ordered_json trace = nlohmann::ordered_json::array();
-      for (std::size_t k = 0; k < res.rms_m.size(); ++k)
-        trace.push_back({{"iteration", k}, {"E", res.E_m2[k]}, {"rms_m", res.rms_m[k]}, {"lines", res.lines[k]}});
-      pair["trace"] = trace;
-      writeJson(s.out / "matching" / ("pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + methodFileName(name) + ".json"), pair);
+      const RegistrationScore score{i, j, name, err, start, success, a, reg.iterations, seconds};
+      PairRecord record;
+      record.score = score;
+      record.T_true = T_IJ, record.T_initial = T_0, record.T_estimated = T_est;
+      record.reg = &reg;
+      record.believed_WS = believed_WS, record.T_WS_i = vi.T_WS, record.T_WS_j = vj.T_WS;
+      record.grid_j = grid_j;
+      record.match = config.match;
+      record.covariance_calibrated = covarianceCalibrated(method, sc.sensor);
+      if (reg.feature_match) writeCorrespondencePicture(s, i, j, name, reg);
+      const std::string stem = "pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + methodFileName(name);
+      writeJson(s.out / "matching" / (stem + ".json"), toJson(record));
       registered.push_back({name, reg.corrected_WS, res.rms_m});
+      const bool covariance = reg.ran_iconic && !res.degenerate;  // ν has a covariance (the pair JSON's)
       PairEstimate estimate{i, j, method, T_est, reg.nu, std::nullopt};
       if (covariance && res.covariance.allFinite()) estimate.covariance = res.covariance;
       estimate.covariance_calibrated = covarianceCalibrated(method, sc.sensor);
@@ -243,7 +133,6 @@ void run(RunState& s) {
       estimate.T_WS_i = vi.T_WS;
       estimate.believed_WS_j = believed_WS;
       s.estimates.push_back(estimate);
-      const RegistrationScore score{i, j, name, err, start, success, a, reg.iterations, seconds};
       s.metrics["registration"].push_back(toJson(score));
       char line[240];
       std::snprintf(line, sizeof line, "match     views %d-%d %-18s %3d iterations: error %.4f m %.3f deg (from %.3f m %.2f deg)%s%s",

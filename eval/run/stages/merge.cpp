@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdio>
 
+#include "eval/score/composite_score.hpp"
 #include "eval/score/map_metrics.hpp"
 #include "eval/pictures/map_outputs.hpp"
 #include "eval/run/stages.hpp"
@@ -63,22 +64,11 @@ void run(RunState& s) {
   }
   s.addTime("merge", t.seconds());
   const MapMetrics m = mapMetrics(composite, truth, visible);
-  s.metrics["composite"] = compositeJson(m, int(s.views.size()), mergePosesName(spec.poses));
-  s.metrics["composite"]["views_used"] = views_used;
-  nlohmann::ordered_json placement = nlohmann::ordered_json::array();
-  for (std::size_t k = 0; k < placements.size(); ++k) {
-    nlohmann::ordered_json e{{"view", k}, {"how", perception::placementHowName(placements[k].how)}};
-    // The links it was chained by, and those the rover rejected that would have placed it.
-    nlohmann::ordered_json chain = nlohmann::ordered_json::array();
-    for (const perception::ChainStep& c : placements[k].chain) chain.push_back({c.link->i, c.link->j});
-    e["links"] = chain;
-    placement.push_back(e);
-  }
-  s.metrics["composite"]["placement"] = placement;
-  nlohmann::ordered_json rejected = nlohmann::ordered_json::array();
-  for (const perception::PlacementLink& l : links)
-    if (!l.accepted) rejected.push_back({l.i, l.j});
-  s.metrics["composite"]["rejected_links"] = rejected;
+  CompositeScore score;
+  score.map = m, score.views = int(s.views.size()), score.views_used = views_used;
+  score.poses = mergePosesName(spec.poses);
+  score.placements = &placements, score.links = &links;
+  s.metrics["composite"] = toJson(score);
   writeMapFiles(s.out / "maps", "composite", composite, &truth,
                 sc.name + ": composite of " + std::to_string(s.views.size()) + " views (" + mergePosesName(spec.poses) +
                     " poses)",
