@@ -22,24 +22,27 @@ struct PathStop {
 
 // The stops every spacing_m along the polyline, from its start; the last stop is the path's end
 // when the length is a whole number of spacings (within 1e-9 m), else the last whole spacing.
-// Throws std::invalid_argument for fewer than 2 waypoints, a zero-length segment or spacing ≤ 0.
+// Throws std::invalid_argument for fewer than 2 waypoints, a non-finite waypoint, a zero-length segment
+// (≤ 1e-9 m) or a spacing that is not positive and finite.
 std::vector<PathStop> stopsAlongPath(const std::vector<Eigen::Vector2d>& waypoints, double spacing_m);
 
 // The body's true pose at a stop: B's origin on the least-squares plane z = a·x + b·y + c fitted
 // to the terrain's surface (terrains::surfaceAt) at the points of a polar grid over the disk of
 // radius footprint_radius_m about the stop (the centre, and rings at r/3, 2r/3 and r of 6, 12 and 18
-// points), B's z the plane's upward normal, B's x the path's heading projected on the plane.
-// Throws std::invalid_argument when a sample falls outside the terrain.
+// points), B's z the plane's upward normal, B's x the path's heading projected on the plane along the
+// vertical (so the pose's heading, perception::headingOf, is the stop's).
+// Throws std::invalid_argument when a sample falls outside the terrain or the radius is not positive and finite.
 Eigen::Isometry3d bodyPoseOnTerrain(const terrains::Terrain& terrain, const PathStop& stop, double footprint_radius_m);
 
 // What odometry measures of each step k−1 → k (k ≥ 1; element 0 is a zero step): the exact step
 // (perception::stepBetween) with TraverseOdometry's errors, drawn from base::Rng streams keyed by
-// (seed, stop). All zero errors give the exact steps bit for bit.
+// (seed, stop). All zero errors give the exact steps bit for bit. Throws std::invalid_argument for a
+// negative or non-finite σ, a non-finite heading bias or a translation bias not above −1.
 std::vector<perception::OdometryStep> measuredSteps(const std::vector<Eigen::Isometry3d>& true_WB,
                                                     const TraverseOdometry& odometry, std::uint64_t seed);
 
 // Dead reckoning alone: the start pose, then each measured step integrated with the true tilt at
-// each stop (the inclinometer).
+// each stop (the inclinometer). Throws std::invalid_argument unless there is one step per pose.
 std::vector<Eigen::Isometry3d> deadReckoning(const std::vector<Eigen::Isometry3d>& true_WB,
                                              const std::vector<perception::OdometryStep>& steps);
 
