@@ -324,11 +324,14 @@ MapSpec readMap(const Reader& reader, const YAML::Node& node) {
   return m;
 }
 
-MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int views) {
+// `traverse`: the scenario is a traverse, whose views the run generates; its matching section
+// gives the success bounds and the odometry model alone.
+MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int views, bool traverse) {
   const Fields f(reader, node, "matching", {"pairs", "methods", "initial_error", "success", "prior", "odometry", "gate",
                                                      "draw_initial_error"});
   MatchingSpec m;
-  if (views < 2) reader.fail("matching", "needs at least two views, the scenario has " + std::to_string(views));
+  if (traverse) refuseMatchingKeysInTraverse(reader, f);
+  if (!traverse && views < 2) reader.fail("matching", "needs at least two views, the scenario has " + std::to_string(views));
   if (const auto p = f.get("pairs")) {
     if (!p->IsSequence() || p->size() == 0) reader.fail("matching.pairs", "expected a non-empty list of [I, J] pairs, got " + shown(*p));
     for (std::size_t i = 0; i < p->size(); ++i) {
@@ -346,19 +349,8 @@ MatchingSpec readMatching(const Reader& reader, const YAML::Node& node, int view
   if (const auto ms = f.get("methods")) {
     if (!ms->IsSequence() || ms->size() == 0) reader.fail("matching.methods", "expected a non-empty list of methods, got " + shown(*ms));
     m.methods.clear();
-    // The names as matchMethodName spells them, in the order the refusal lists them.
-    static constexpr MatchMethod kNamed[] = {
-        MatchMethod::Iconic,           MatchMethod::IconicLm,        MatchMethod::Features,
-        MatchMethod::FeaturesIconic,   MatchMethod::IconicWeighted,  MatchMethod::FeaturesLm,
-        MatchMethod::IcpPointToPlane,  MatchMethod::Gicp,            MatchMethod::Fgr,
-        MatchMethod::IconicRobust,     MatchMethod::FeaturesIconicRobust, MatchMethod::FeaturesIconicWeighted};
-    std::vector<std::string_view> names;
-    for (const MatchMethod k : kNamed) names.emplace_back(matchMethodName(k));
-    for (std::size_t i = 0; i < ms->size(); ++i) {
-      const std::string path = "matching.methods[" + std::to_string(i) + "]";
-      const std::string_view name = reader.choice((*ms)[i], path, names);
-      m.methods.push_back(kNamed[std::find(names.begin(), names.end(), name) - names.begin()]);
-    }
+    for (std::size_t i = 0; i < ms->size(); ++i)
+      m.methods.push_back(readMatchMethod(reader, (*ms)[i], "matching.methods[" + std::to_string(i) + "]"));
   }
   if (const auto e = f.get("initial_error")) {
     const Fields fe(reader, *e, "matching.initial_error", {"xyz_m", "rpy_deg"});
@@ -480,8 +472,8 @@ LegSpec readLeg(const Reader& reader, const YAML::Node& node) {
 
 Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::path& file) {
   const Fields f(reader, root, "",
-                 {"name", "description", "seed", "terrain", "sensor", "views", "map", "matching", "merge", "footfall",
-                  "leg"});
+                 {"name", "description", "seed", "terrain", "sensor", "views", "traverse", "map", "matching", "merge",
+                  "footfall", "leg"});
   Scenario s;
   s.file = file;
   s.name = reader.string(f.required("name"), "name");
@@ -499,11 +491,19 @@ Scenario readScenario(const Reader& reader, const YAML::Node& root, const fs::pa
   }
   s.terrain = readTerrain(reader, f.required("terrain"), file);
   if (const auto node = f.get("sensor")) s.sensor = readSensor(reader, *node);
-  s.views = readViews(reader, f.required("views"), s.terrain);
+  if (const auto node = f.get("traverse")) {
+    refuseBesideTraverse(reader, f);
+    s.traverse = readTraverse(reader, *node, s.terrain);
+  } else {
+    s.views = readViews(reader, f.required("views"), s.terrain);
+  }
   if (const auto node = f.get("map")) s.map = readMap(reader, *node);
+  if (s.traverse && s.traverse->reg != TraverseRegister::None && !s.map)
+    reader.fail("traverse.register", std::string(traverseRegisterName(s.traverse->reg)) +
+                                         " needs a map section: each stop is registered through its map (or register: none)");
   if (const auto node = f.get("matching")) {
     if (!s.map) reader.fail("matching", "needs a map section: the views are matched through their maps");
-    s.matching = readMatching(reader, *node, int(s.views.size()));
+    s.matching = readMatching(reader, *node, int(s.views.size()), s.traverse.has_value());
   }
   if (const auto node = f.get("merge")) {
     if (!s.map) reader.fail("merge", "needs a map section: the composite is made of the views' maps");

@@ -47,7 +47,8 @@ struct MapSpec {
   perception::ShadowMethod shadows = perception::ShadowMethod::Gnc;  // gnc | none
   Baseline baseline = Baseline::Cartesian;                           // cartesian | none
 
-  // The grid of the map region (in the world frame), and what the map stage asks of scanToMap.
+  // The grid of the map region (in the world frame; in a traverse, in each stop's heading frame:
+  // docs/scenario.md, "traverse"), and what the map stage asks of scanToMap.
   perception::MapGrid grid() const;
   perception::ScanToMapConfig scanToMapConfig() const;
 };

@@ -1,8 +1,9 @@
 #pragma once
 // Internal to eval/scenario*.cpp: the strict reader's typed access to YAML values. Reader checks
 // one value and fails with "<file>: <key path>: <what is wrong>"; Fields checks one mapping's keys.
-// The schema that uses them (which keys, which ranges) is in scenario.cpp; the helpers declared
-// here are defined in scenario_reader.cpp.
+// The schema that uses them (which keys, which ranges) is in scenario.cpp and, for the traverse
+// section, scenario_traverse.cpp; the helpers declared here are defined in scenario_reader.cpp,
+// the traverse section's functions at the end of this file in scenario_traverse.cpp.
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -228,5 +229,19 @@ class Fields {
   std::string path_;
   std::vector<std::pair<std::string, YAML::Node>> entries_;
 };
+
+// A matching method by its scenario name (matchMethodName's words), as matching.methods and
+// traverse.method take it; fails naming `path` for any other value.
+MatchMethod readMatchMethod(const Reader& reader, const YAML::Node& node, const std::string& path);
+
+// The traverse section (docs/scenario.md, "traverse"), its path checked over the terrain (a
+// generated one: an MJCF world's extent is known once it is loaded).
+TraverseSpec readTraverse(const Reader& reader, const YAML::Node& node, const terrains::TerrainSpec& terrain);
+// The top-level sections a traverse replaces (views, merge) or does not support (footfall, leg),
+// refused beside it by name.
+void refuseBesideTraverse(const Reader& reader, const Fields& top);
+// The matching keys a traverse sets itself (pairs, methods, the initial error) or does not take
+// (prior, gate), refused in its matching section by name.
+void refuseMatchingKeysInTraverse(const Reader& reader, const Fields& matching);
 
 }  // namespace ambler::eval::scenario_detail

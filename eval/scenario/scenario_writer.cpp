@@ -151,10 +151,18 @@ std::string sensorYaml(const perception::SensorModel& c) {
   return y;
 }
 
-// `matching:` with every key; the initial error only when it is given, not drawn.
-std::string matchingYaml(const MatchingSpec& m) {
+// `matching:` with every key; the initial error only when it is given, not drawn. In a traverse,
+// only the keys it takes: success and odometry.
+std::string matchingYaml(const MatchingSpec& m, bool traverse) {
   const auto num = [](double v) { return shortest(v); };
   const auto deg = [](double rad) { return degreesText(rad); };
+  const std::string success = "  success: {translation_m: " + num(m.success_translation_m) +
+                              ", rotation_deg: " + num(m.success_rotation_deg) + "}\n";
+  const perception::OdometryModel& o = m.odometry;
+  const std::string odometry = "  odometry: {translation_per_m: " + num(o.translation_per_m) + ", translation_floor_m: " +
+                               num(o.translation_floor_m) + ", heading_deg_per_m: " + num(o.heading_deg_per_m) +
+                               ", heading_floor_deg: " + num(o.heading_floor_deg) + "}\n";
+  if (traverse) return "matching:\n" + success + odometry;
   std::string y;
   y += "matching:\n  pairs: [";
   for (std::size_t i = 0; i < m.pairs.size(); ++i)
@@ -166,15 +174,31 @@ std::string matchingYaml(const MatchingSpec& m) {
   if (!m.draw_initial_error)  // drawn, it is the odometry model's (and initial_error may not be given)
     y += "  initial_error: {xyz_m: " + list({num(e.xyz_m.x()), num(e.xyz_m.y()), num(e.xyz_m.z())}) +
          ", rpy_deg: " + list({deg(e.rpy_rad.x()), deg(e.rpy_rad.y()), deg(e.rpy_rad.z())}) + "}\n";
-  y += "  success: {translation_m: " + num(m.success_translation_m) + ", rotation_deg: " +
-       num(m.success_rotation_deg) + "}\n";
+  y += success;
   y += "  prior: {translation_m: " + num(m.prior_translation_m) + ", rotation_deg: " + num(m.prior_rotation_deg) + "}\n";
-  const perception::OdometryModel& o = m.odometry;
-  y += "  odometry: {translation_per_m: " + num(o.translation_per_m) + ", translation_floor_m: " +
-       num(o.translation_floor_m) + ", heading_deg_per_m: " + num(o.heading_deg_per_m) +
-       ", heading_floor_deg: " + num(o.heading_floor_deg) + "}\n";
+  y += odometry;
   y += std::string("  gate: ") + (m.gate_by_prior ? "prior" : "odometry") + "\n";
   y += std::string("  draw_initial_error: ") + (m.draw_initial_error ? "true" : "false") + "\n";
+  return y;
+}
+
+// `traverse:` with every key; the path as its waypoints (the start, heading and length form
+// written as the two points it makes).
+std::string traverseYaml(const TraverseSpec& t) {
+  const auto num = [](double v) { return shortest(v); };
+  std::string y = "traverse:\n  path: {waypoints_xy_m: [";
+  for (std::size_t i = 0; i < t.waypoints_xy_m.size(); ++i)
+    y += (i ? ", " : "") + list({num(t.waypoints_xy_m[i].x()), num(t.waypoints_xy_m[i].y())});
+  y += "]}\n";
+  y += "  stop_spacing_m: " + num(t.stop_spacing_m) + "\n";
+  y += "  footprint_radius_m: " + num(t.footprint_radius_m) + "\n";
+  y += "  mount: {height_m: " + num(t.mount.height_m) + ", pitch_deg: " + degreesText(t.mount.pitch_rad) + "}\n";
+  const TraverseOdometry& o = t.odometry;
+  y += "  odometry: {translation_sigma_per_m: " + num(o.translation_sigma_per_m) + ", heading_sigma_deg_per_m: " +
+       num(o.heading_sigma_deg_per_m) + ", translation_bias: " + num(o.translation_bias) +
+       ", heading_bias_deg_per_m: " + num(o.heading_bias_deg_per_m) + "}\n";
+  y += std::string("  register: ") + traverseRegisterName(t.reg) + "\n";
+  y += std::string("  method: ") + matchMethodName(t.method) + "\n";
   return y;
 }
 
@@ -190,10 +214,14 @@ std::string resolvedYaml(const Scenario& s) {
 
   y += terrainYaml(s.terrain);
   y += sensorYaml(s.sensor);
-  y += "views:\n";
-  for (const auto& v : s.views) {
-    y += "  - {xyz_m: " + list({num(v.xyz_m.x()), num(v.xyz_m.y()), num(v.xyz_m.z())}) +
-         ", rpy_deg: " + list({deg(v.rpy_rad.x()), deg(v.rpy_rad.y()), deg(v.rpy_rad.z())}) + "}\n";
+  if (s.traverse) {
+    y += traverseYaml(*s.traverse);
+  } else {
+    y += "views:\n";
+    for (const auto& v : s.views) {
+      y += "  - {xyz_m: " + list({num(v.xyz_m.x()), num(v.xyz_m.y()), num(v.xyz_m.z())}) +
+           ", rpy_deg: " + list({deg(v.rpy_rad.x()), deg(v.rpy_rad.y()), deg(v.rpy_rad.z())}) + "}\n";
+    }
   }
 
   if (s.map) {
@@ -206,7 +234,7 @@ std::string resolvedYaml(const Scenario& s) {
     y += std::string("  shadows: ") + shadowsName(m.shadows) + "\n";
     y += std::string("  baseline: ") + baselineName(m.baseline) + "\n";
   }
-  if (s.matching) y += matchingYaml(*s.matching);
+  if (s.matching) y += matchingYaml(*s.matching, s.traverse.has_value());
   if (s.merge) {
     const auto& m = *s.merge;
     y += std::string("merge:\n  poses: ") + mergePosesName(m.poses) + "\n";

@@ -143,6 +143,29 @@ expect_error foot_larger_than_region 'foot\.yaml: footfall\.foot_diameter_m: 0\.
 scenario ffmap.yaml 'map: {}\nfootfall: {map: view_3}\n'
 expect_error footfall_map_unknown "ffmap\.yaml: footfall\.map: expected composite or view_K with K in \[0, 0\], got 'view_3'" run ffmap.yaml --out out
 
+# ---- Traverses (a 30 x 10 m plane; the path 20 m along x)
+traverse='name: x\nterrain: {kind: plane, size_m: [30, 10]}\nmap: {}\n'
+line='{start_xy_m: [-10, 0], heading_deg: 0, length_m: 20}'
+printf "$traverse"'traverse: {path: %s}\nviews: [{xyz_m: [0, 0, 1]}]\n' "$line" >tviews.yaml
+expect_error traverse_with_views 'tviews\.yaml: views: a traverse generates its views, one per stop; remove views' run tviews.yaml --out out
+printf "$traverse"'traverse: {path: %s}\nfootfall: {}\n' "$line" >tfoot.yaml
+expect_error traverse_with_footfall 'tfoot\.yaml: footfall: not yet supported in a traverse' run tfoot.yaml --out out
+printf "$traverse"'traverse: {path: %s}\nmatching: {pairs: [[0, 1]]}\n' "$line" >tpairs.yaml
+expect_error traverse_matching_pairs 'tpairs\.yaml: matching\.pairs: a traverse registers each stop as traverse\.register says; remove pairs' run tpairs.yaml --out out
+printf "$traverse"'traverse: {path: {start_xy_m: [-10, 0], heading_deg: 0, length_m: 20, waypoints_xy_m: [[0, 0], [1, 0]]}}\n' >tforms.yaml
+expect_error traverse_path_both_forms 'tforms\.yaml: traverse\.path: expected start_xy_m, heading_deg and length_m, or waypoints_xy_m, got both forms' run tforms.yaml --out out
+printf "$traverse"'traverse: {path: {waypoints_xy_m: [[0, 0], [1, 0], [1, 0]]}}\n' >trepeat.yaml
+expect_error traverse_waypoint_repeated 'trepeat\.yaml: traverse\.path\.waypoints_xy_m\[2\]: expected a point other than the one before' run trepeat.yaml --out out
+printf "$traverse"'traverse: {path: {start_xy_m: [-10, 0], heading_deg: 0, length_m: 30}}\n' >toff.yaml
+expect_error traverse_path_off_terrain "toff\.yaml: traverse\.path\.length_m: expected the path's end within the terrain less the footprint radius 1" run toff.yaml --out out
+printf "$traverse"'traverse: {path: %s, stop_spacing_m: 25}\n' "$line" >tspacing.yaml
+expect_error traverse_spacing_beyond_path "tspacing\.yaml: traverse\.stop_spacing_m: expected at most the path's length \(20\), got 25" run tspacing.yaml --out out
+printf 'name: x\nterrain: {kind: plane, size_m: [30, 10]}\ntraverse: {path: %s}\n' "$line" >tnomap.yaml
+expect_error traverse_without_map 'tnomap\.yaml: traverse\.register: composite needs a map section' run tnomap.yaml --out out
+printf "$traverse"'traverse: {path: %s}\n' "$line" >traverse.yaml
+expect_error traverse_not_run 'traverse\.yaml: traverse: not yet supported by ambler run' run traverse.yaml --out out
+expect_error traverse_not_basin 'traverse\.yaml: traverse: not yet supported by ambler basin' basin traverse.yaml --out out
+
 # ---- Views: over the terrain and above it
 printf 'name: x\nterrain: {kind: plane, size_m: [20, 20]}\nviews: [{xyz_m: [0, -6, 3]}, {xyz_m: [12, 0, 3]}]\n' >outside.yaml
 expect_error view_outside_terrain 'outside\.yaml: views\[1\]\.xyz_m: expected x in \[-10, 10\] and y in \[-10, 10\] \(over the terrain\), got \[12, 0, 3\]' run outside.yaml --out out

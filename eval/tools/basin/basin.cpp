@@ -60,6 +60,7 @@ Draw draw(const BasinGrid& g, std::size_t u) {
 
 void validate(const Scenario& sc, const BasinOptions& opt) {
   const std::string file = sc.file.empty() ? sc.name : sc.file.string();
+  if (sc.traverse) throw BasinError(file + ": traverse: not yet supported by ambler basin (it registers one pair of views)");
   if (!sc.matching) throw BasinError(file + ": matching: a basin registers the scenario's pair by its matching methods; "
                                             "the scenario has no matching section");
   if (!sc.map) throw BasinError(file + ": map: a basin needs the map section (view I's map is the reference)");

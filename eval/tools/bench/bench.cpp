@@ -299,6 +299,7 @@ nlohmann::ordered_json benchMap(const BenchOptions& opt) {
 nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
   if (!sc.map || !sc.matching)
     throw std::runtime_error(sc.file.string() + ": bench match needs a scenario with map and matching sections");
+  if (sc.traverse) throw std::runtime_error(sc.file.string() + ": traverse: not yet supported by bench match");
   std::fprintf(stderr, "bench match: building %s's world, scans and maps...\n", sc.name.c_str());
   const fs::path dir = fs::temp_directory_path() / ("ambler-bench-match-" + std::to_string(::getpid()));
   struct Cleanup {

@@ -89,9 +89,11 @@ std::vector<Sweep> descentSweeps(const DescentOptions& opt) {
       throw SweepError("--seeds: " + std::to_string(n) + " is more than the " + std::to_string(s.runs.size()) +
                        " seeds of " + s.file.string());
     s.runs.resize(n);
-    for (const Scenario& sc : s.runs)
+    for (const Scenario& sc : s.runs) {
       if (!sc.matching || !sc.map)
         throw SweepError(s.file.string() + ": the experiment needs the map and matching sections in every run");
+      if (sc.traverse) throw SweepError(s.file.string() + ": traverse: not yet supported by the descent experiment");
+    }
     sweeps.push_back(std::move(s));
   }
   return sweeps;

@@ -115,6 +115,23 @@ void expectSame(const Scenario& a, const Scenario& b) {
     EXPECT_SAME(a.matching->prior_translation_m, b.matching->prior_translation_m);
     EXPECT_SAME(a.matching->prior_rotation_deg, b.matching->prior_rotation_deg);
   }
+  ASSERT_EQ(a.traverse.has_value(), b.traverse.has_value());
+  if (a.traverse) {
+    const TraverseSpec &ta = *a.traverse, &tb = *b.traverse;
+    ASSERT_EQ(ta.waypoints_xy_m.size(), tb.waypoints_xy_m.size());
+    for (std::size_t k = 0; k < ta.waypoints_xy_m.size(); ++k)
+      for (int i = 0; i < 2; ++i) EXPECT_SAME(ta.waypoints_xy_m[k][i], tb.waypoints_xy_m[k][i]);
+    EXPECT_SAME(ta.stop_spacing_m, tb.stop_spacing_m);
+    EXPECT_SAME(ta.footprint_radius_m, tb.footprint_radius_m);
+    EXPECT_SAME(ta.mount.height_m, tb.mount.height_m);
+    EXPECT_SAME(ta.mount.pitch_rad, tb.mount.pitch_rad);
+    EXPECT_SAME(ta.odometry.translation_sigma_per_m, tb.odometry.translation_sigma_per_m);
+    EXPECT_SAME(ta.odometry.heading_sigma_deg_per_m, tb.odometry.heading_sigma_deg_per_m);
+    EXPECT_SAME(ta.odometry.translation_bias, tb.odometry.translation_bias);
+    EXPECT_SAME(ta.odometry.heading_bias_deg_per_m, tb.odometry.heading_bias_deg_per_m);
+    EXPECT_EQ(ta.reg, tb.reg);
+    EXPECT_EQ(ta.method, tb.method);
+  }
 }
 
 // parseScenario(resolvedYaml(s)) == s, and resolving again changes nothing.
@@ -175,7 +192,7 @@ TEST(ScenarioExamples, EveryExampleLoadsAndRoundTrips) {
     names.insert(entry.path().stem().string());
     expectRoundTrip(s);
   }
-  for (const char* name : {"demo", "plane", "ledge", "mars", "dem"})
+  for (const char* name : {"demo", "plane", "ledge", "mars", "dem", "traverse"})
     EXPECT_TRUE(names.count(name)) << name;
 }
 
@@ -590,7 +607,8 @@ TEST(ScenarioErrors, UnknownKeysEverywhere) {
   expectError(kMinimal + "map: {region: {x_m: [0, 1], z_m: [0, 1]}}\n", "map.region.z_m",
               "unknown key");
   expectError(kMinimal + "colour: red\n", "colour",
-              "unknown key (allowed: name, description, seed, terrain, sensor, views, map, matching, merge, footfall, leg)");
+              "unknown key (allowed: name, description, seed, terrain, sensor, views, traverse, map, matching, merge, footfall, "
+              "leg)");
   expectError(
       "name: t\nterrain: {kind: plane, rocks: {abundance: 0.1}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
       "terrain.rocks.abundance", "did you mean abundance_k?");

@@ -258,6 +258,51 @@ TEST(Sweep, BadKeyPathNamesTheAxis) {
             std::string::npos);
 }
 
+// Traverse keys are axes like any other: a dotted path into the section, creating what the base
+// leaves out (here traverse.odometry), each value checked by the scenario reader.
+TEST(Sweep, TraverseKeysAreAxes) {
+  const std::string base = "name: walk\nterrain: {kind: plane, size_m: [70, 24], cell_m: 0.1}\nmap: {}\n"
+                           "traverse: {path: {start_xy_m: [-25, 0], heading_deg: 0, length_m: 50}}\n";
+  const auto sweepOver = [&](const std::string& axes) {
+    test::TempDir t;
+    spit(t.dir / "base.yaml", base);
+    spit(t.dir / "sweep.yaml", "name: walks\nbase: base.yaml\naxes:\n" + axes);
+    return loadSweep(t.dir / "sweep.yaml");
+  };
+  const Sweep sweep = sweepOver("  traverse.odometry.translation_sigma_per_m: [0, 0.02, 0.05]\n"
+                                "  traverse.path.length_m: [20, 50]\n");
+  ASSERT_EQ(sweep.runs.size(), 6u);
+  const double sigma[] = {0, 0.02, 0.05};
+  for (std::size_t k = 0; k < 6; ++k) {
+    ASSERT_TRUE(sweep.runs[k].traverse.has_value()) << k;
+    const TraverseSpec& t = *sweep.runs[k].traverse;
+    EXPECT_EQ(t.odometry.translation_sigma_per_m, sigma[k / 2]) << k;
+    EXPECT_EQ(t.odometry.heading_sigma_deg_per_m, 0.5) << k;  // the rest of the section: its defaults
+    EXPECT_EQ(t.waypoints_xy_m.back(), Eigen::Vector2d(k % 2 ? 25 : -5, 0)) << k;
+  }
+  try {
+    sweepOver("  traverse.odometry.translation_sigma_per_m: [0.02, -0.1]\n");
+    FAIL() << "expected a SweepError";
+  } catch (const SweepError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("sweep.yaml: axes.traverse.odometry.translation_sigma_per_m = -0.1: "), std::string::npos)
+        << message;
+    EXPECT_NE(message.find("base.yaml: traverse.odometry.translation_sigma_per_m: expected a number >= 0, got -0.1"),
+              std::string::npos)
+        << message;
+  }
+  // The other path form beside the base's: refused as in a scenario file.
+  try {
+    sweepOver("  traverse.path.waypoints_xy_m: [[[0, 0], [1, 0]]]\n");
+    FAIL() << "expected a SweepError";
+  } catch (const SweepError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("traverse.path: expected start_xy_m, heading_deg and length_m, or waypoints_xy_m, got both"),
+              std::string::npos)
+        << message;
+  }
+}
+
 TEST(Sweep, SweepFileErrorsNameFileAndKey) {
   const auto error = [](const std::string& text) { return loadError(SweepDir(text)); };
   EXPECT_NE(error("name: x\nbase: base.yaml\naxes: {seed: [1]}\ncolour: red\n")
