@@ -58,6 +58,7 @@ struct RunState {
   GeoFrame geo;                     // world stage: the CRS of map rasters (a DEM's, or a local frame)
   std::optional<terrains::TerrainSpec> terrain_resolved;  // world stage, a DEM: the terrain with the window
                                                           // centre and vertical offset it read from the file
+  std::optional<terrains::Terrain> terrain;  // world stage: the generated terrain (none for an MJCF world)
   std::filesystem::path world_xml;  // world stage: the world's MJCF in the run directory
   std::unique_ptr<sim::RayScene> scene;
   std::unique_ptr<sim::GroundTruth> truth;

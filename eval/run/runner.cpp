@@ -10,8 +10,6 @@ namespace fs = std::filesystem;
 
 
 nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
-  // The stages take views; a traverse has none to give them.
-  if (sc.traverse) throw ScenarioError(sc.file.string() + ": traverse: not yet supported by ambler run");
   base::Stopwatch total;
   RunState state{sc, opt.out, opt.progress};
   // No directory yet: the world stage makes it once the views are checked against the terrain,

@@ -25,6 +25,7 @@ const std::vector<Stage>& runStages() {
       stages::merge(),
       stages::footfall(),
       stages::leg(),
+      stages::traverse(),
   };
   return all;
 }

@@ -27,6 +27,7 @@ Stage match();      // each pair of views registered by each method, scored; mat
 Stage merge();      // the composite map of every view, scored; maps/composite_*
 Stage footfall();   // each method's footfall on a map, scored on the true surface; footfall/
 Stage leg();        // the MuJoCo leg steps on each choice; leg/, world/leg.xml
+Stage traverse();   // the rover walks the path: each stop scanned, registered, merged; traverse/
 }  // namespace stages
 
 }  // namespace ambler::eval

@@ -108,7 +108,8 @@ double pathLength(const std::vector<Eigen::Vector2d>& points) {
 // heightfield, as readViews takes it), so the body's footprint at every stop lies on the terrain.
 // The terrain and the shrunk rectangle are convex: the waypoints inside means the path inside.
 void checkPathOverTerrain(const Reader& reader, const PathPoints& path, double radius, const terrains::TerrainSpec& t) {
-  if (t.kind == TerrainKind::Mjcf) return;
+  if (t.kind == TerrainKind::Mjcf)
+    reader.fail("terrain.kind", "a traverse stands its body on a generated terrain or a DEM, not on an MJCF world");
   const double hx = std::round(t.size_m.x() / t.cell_m) * t.cell_m / 2.0 - radius;
   const double hy = std::round(t.size_m.y() / t.cell_m) * t.cell_m / 2.0 - radius;
   const auto m = [](double v) { return shortest(std::round(v * 1e6) / 1e6); };  // 10, not 10.000000000000002

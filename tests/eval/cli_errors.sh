@@ -163,7 +163,6 @@ expect_error traverse_spacing_beyond_path "tspacing\.yaml: traverse\.stop_spacin
 printf 'name: x\nterrain: {kind: plane, size_m: [30, 10]}\ntraverse: {path: %s}\n' "$line" >tnomap.yaml
 expect_error traverse_without_map 'tnomap\.yaml: traverse\.register: composite needs a map section' run tnomap.yaml --out out
 printf "$traverse"'traverse: {path: %s}\n' "$line" >traverse.yaml
-expect_error traverse_not_run 'traverse\.yaml: traverse: not yet supported by ambler run' run traverse.yaml --out out
 expect_error traverse_not_basin 'traverse\.yaml: traverse: not yet supported by ambler basin' basin traverse.yaml --out out
 
 # ---- Views: over the terrain and above it
@@ -172,6 +171,8 @@ expect_error view_outside_terrain 'outside\.yaml: views\[1\]\.xyz_m: expected x 
 printf 'name: x\nterrain: {kind: steps, size_m: [10, 10], cell_m: 0.1, steps: [{x_m: 0, height_m: 0.4}]}\nviews: [{xyz_m: [-3, 0, 1]}, {xyz_m: [3, 0, 0.3]}]\n' >below.yaml
 expect_error view_below_terrain 'below\.yaml: views\[1\]\.xyz_m: expected the sensor above the terrain, whose surface is at z = 0\.400 there, got z = 0\.3' run below.yaml --out out
 printf '<mujoco>\n  <worldbody>\n    <geom type="box" size="3 3 0.5" pos="0 0 -0.5"/>\n  </worldbody>\n</mujoco>\n' >box.xml
+printf 'name: x\nterrain: {kind: mjcf, mjcf: box.xml}\nmap: {}\ntraverse: {path: %s}\n' "$line" >tmjcf.yaml
+expect_error traverse_on_mjcf 'tmjcf\.yaml: terrain\.kind: a traverse stands its body on a generated terrain or a DEM, not on an MJCF world' run tmjcf.yaml --out out
 printf 'name: x\nterrain: {kind: mjcf, mjcf: box.xml}\nviews: [{xyz_m: [5, 0, 2]}]\n' >mjcf_outside.yaml
 expect_error mjcf_view_outside_world 'mjcf_outside\.yaml: views\[0\]\.xyz_m: expected a sensor over the terrain, got \[5, 0, 2\], where there is no ground' run mjcf_outside.yaml --out out
 printf 'name: x\nterrain: {kind: mjcf, mjcf: box.xml}\nviews: [{xyz_m: [0, 0, -2]}]\n' >mjcf_below.yaml

@@ -49,7 +49,7 @@ void run(RunState& s) {
 }  // namespace
 
 Stage cartesian() {
-  return {"cartesian", [](const Scenario& sc) { return sc.map && sc.map->baseline == Baseline::Cartesian; }, run};
+  return {"cartesian", [](const Scenario& sc) { return sc.map && !sc.traverse && sc.map->baseline == Baseline::Cartesian; }, run};
 }
 
 }  // namespace ambler::eval::stages

@@ -44,7 +44,7 @@ void run(RunState& s) {
 }  // namespace
 
 Stage map() {
-  return {"map", [](const Scenario& sc) { return sc.map.has_value(); }, run};
+  return {"map", [](const Scenario& sc) { return sc.map && !sc.traverse; }, run};
 }
 
 }  // namespace ambler::eval::stages

@@ -55,7 +55,7 @@ void run(RunState& s) {
 }  // namespace
 
 Stage scan() {
-  return {"scan", [](const Scenario&) { return true; }, run};
+  return {"scan", [](const Scenario& sc) { return !sc.traverse; }, run};  // a traverse scans its stops
 }
 
 }  // namespace ambler::eval::stages

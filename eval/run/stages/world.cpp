@@ -80,6 +80,7 @@ void run(RunState& s) {
     s.say("world     " + std::to_string(terrain.ground.rows()) + "x" + std::to_string(terrain.ground.cols()) +
           " heightfield, " + std::to_string(terrain.rocks.size()) + " rocks -> " + xml.string());
     s.scene = std::make_unique<sim::RayScene>(*s.world);
+    if (sc.traverse) s.terrain = terrain;  // the body's poses stand on it
     if (dem) {
       // Map rasters sit on the DEM: its CRS, the world origin at the window centre.
       s.geo = dem->frame;

@@ -270,14 +270,19 @@ TEST(ScenarioTraverse, PathStaysOnTheTerrain) {
               "(x in [-33, 33], y in [-10, 10]), got [-33.5, 0]");
   expectError(withPath(kLine, "footprint_radius_m: 13"), "traverse.footprint_radius_m",
               "expected at most half the terrain's smaller side (12), got 13");
-  // An MJCF world's extent is known once it is loaded: the reader leaves that path alone.
+  // The body stands on the terrain's surface, which an MJCF world does not give: refused.
   const fs::path dir = fs::temp_directory_path() / ("ambler-test-traverse-" + std::to_string(::getpid()));
   fs::create_directories(dir);
   std::ofstream(dir / "w.xml") << "<mujoco/>\n";
-  const Scenario mjcf = parseScenario("name: t\nterrain: {kind: mjcf, mjcf: w.xml}\nmap: {}\n"
-                                      "traverse: {path: {waypoints_xy_m: [[-500, 0], [500, 0]]}}\n",
-                                      dir / "x.yaml");
-  EXPECT_EQ(mjcf.traverse->waypoints_xy_m.back(), Eigen::Vector2d(500, 0));
+  try {
+    parseScenario("name: t\nterrain: {kind: mjcf, mjcf: w.xml}\nmap: {}\n"
+                  "traverse: {path: {waypoints_xy_m: [[-500, 0], [500, 0]]}}\n",
+                  dir / "x.yaml");
+    ADD_FAILURE() << "an MJCF world under a traverse was taken";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("terrain.kind: a traverse stands its body on a generated terrain or a DEM"),
+              std::string::npos) << e.what();
+  }
   fs::remove_all(dir);
 }
 

@@ -1,0 +1,248 @@
+// The traverse stage (docs/scenario.md, "traverse"; docs/traverse.md): the body's true pose at
+// each stop on the true terrain, odometry's measured steps with the scenario's seeded errors, one
+// ERIM scan per stop from the true pose, and the rover's loop (perception::Localiser: map,
+// register, accept, merge, carry the pose on) fed with them; then its poses and its composite
+// scored against the truth: traverse/poses.csv, maps/composite_*, metrics.traverse.
+#include <cstdio>
+#include <optional>
+#include <sstream>
+
+#include "base/random.hpp"
+#include "base/text.hpp"
+#include "eval/pictures/map_outputs.hpp"
+#include "eval/pictures/traverse_figures.hpp"
+#include "eval/run/stages.hpp"
+#include "eval/run/traverse_truth.hpp"
+#include "eval/scenario/io.hpp"
+#include "eval/score/map_metrics.hpp"
+#include "eval/score/registration_score.hpp"
+#include "eval/score/trajectory_score.hpp"
+#include "perception/rigid_transform.hpp"
+#include "perception/traverse.hpp"
+
+namespace ambler::eval::stages {
+
+namespace {
+
+perception::TraverseReference referenceOf(TraverseRegister r) {
+  switch (r) {
+    case TraverseRegister::Previous: return perception::TraverseReference::Previous;
+    case TraverseRegister::None: return perception::TraverseReference::None;
+    default: return perception::TraverseReference::Composite;
+  }
+}
+
+// The corridor: the world-aligned box around every planned stop's mapped region, with a margin
+// for the drift (the rover plans it from the path, not from the truth).
+perception::MapGrid corridorGrid(const std::vector<PathStop>& stops, const MapSpec& map, const perception::Mount& mount) {
+  constexpr double kMargin = 3.0;
+  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+  for (const PathStop& s : stops) {
+    const Eigen::Vector2d f(std::cos(s.heading_rad), std::sin(s.heading_rad)), right(f.y(), -f.x());
+    for (const double x : {map.x_m.x(), map.x_m.y()})
+      for (const double y : {map.y_m.x(), map.y_m.y(), 0.0}) {
+        const Eigen::Vector2d q = s.xy + x * right + y * f;
+        x0 = std::min(x0, q.x()), x1 = std::max(x1, q.x()), y0 = std::min(y0, q.y()), y1 = std::max(y1, q.y());
+      }
+  }
+  (void)mount;
+  const double c = map.cell_m;
+  return perception::MapGrid::covering(std::floor((x0 - kMargin) / c) * c, std::ceil((x1 + kMargin) / c) * c,
+                                       std::floor((y0 - kMargin) / c) * c, std::ceil((y1 + kMargin) / c) * c, c);
+}
+
+// The scenario's roll, pitch, yaw of a rotation, R = Rz(yaw)·Ry(roll)·Rx(pitch) (docs/conventions.md).
+Eigen::Vector3d rpyOf(const Eigen::Matrix3d& R) {
+  // R = Rz(y)·Ry(r)·Rx(p): R(2,0) = −sin r, R(2,1) = cos r·sin p, R(2,2) = cos r·cos p,
+  // R(0,0) = cos y·cos r, R(1,0) = sin y·cos r.
+  const double roll = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+  return {roll, std::atan2(R(2, 1), R(2, 2)), std::atan2(R(1, 0), R(0, 0))};
+}
+
+// x, y, z and roll, pitch, yaw (degrees, the scenario's convention) of a sensor pose.
+std::string poseCells(const Eigen::Isometry3d& T) {
+  const Eigen::Vector3d rpy = rpyOf(T.linear()) * (180 / M_PI);
+  std::string out;
+  for (const double x : {T.translation().x(), T.translation().y(), T.translation().z(), rpy.x(), rpy.y(), rpy.z()})
+    out += "," + base::shortestText(x);
+  return out;
+}
+
+// A stop's registration against the truth: the relative pose it implies from the previous
+// stop's estimate, against the true relative pose.
+struct StopScore {
+  perception::PoseError error;
+  bool success = false;
+};
+
+// A CSV cell: quoted when it holds a comma or a quote (RFC 4180).
+std::string csvCell(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return out + "\"";
+}
+
+void writePoses(const std::filesystem::path& file, const std::vector<PathStop>& stops,
+                const std::vector<Eigen::Isometry3d>& truth, const std::vector<Eigen::Isometry3d>& believed,
+                const std::vector<perception::StopEstimate>& est, const std::vector<std::optional<StopScore>>& scores) {
+  std::string csv = "stop,distance_m,accepted";
+  for (const char* who : {"true", "believed", "estimated"})
+    for (const char* k : {"x_m", "y_m", "z_m", "roll_deg", "pitch_deg", "yaw_deg"}) csv += std::string(",") + who + "_" + k;
+  csv += ",registration_translation_error_m,registration_rotation_error_deg,success,reject_reasons\n";
+  for (std::size_t k = 0; k < stops.size(); ++k) {
+    csv += std::to_string(k) + "," + base::shortestText(stops[k].distance_m) + "," +
+           (est[k].registered ? (est[k].accepted ? "true" : "false") : "") + poseCells(truth[k]) +
+           poseCells(believed[k]) + poseCells(est[k].estimated_WS);
+    if (scores[k]) {
+      std::string reasons;
+      for (const std::string& r : est[k].registration->assessment.reject_reasons) reasons += (reasons.empty() ? "" : "; ") + r;
+      csv += "," + base::shortestText(scores[k]->error.translation_m) + "," + base::shortestText(scores[k]->error.rotation_deg) +
+             "," + (scores[k]->success ? "true" : "false") + "," + csvCell(reasons);
+    } else {
+      csv += ",,,,";
+    }
+    csv += "\n";
+  }
+  writeText(file, csv);
+}
+
+void run(RunState& s) {
+  const Scenario& sc = s.scenario;
+  const TraverseSpec& spec = *sc.traverse;
+  const MapSpec map = sc.map ? *sc.map : MapSpec{};
+  // The truth: stops, body and sensor poses on the true terrain; odometry's steps.
+  if (!s.terrain) throw std::logic_error("traverse stage: no terrain (the reader refuses an MJCF world in a traverse)");
+  const std::vector<PathStop> stops = stopsAlongPath(spec.waypoints_xy_m, spec.stop_spacing_m);
+  std::vector<Eigen::Isometry3d> true_WB, true_WS, believed_WS;
+  for (const PathStop& stop : stops) {
+    true_WB.push_back(bodyPoseOnTerrain(*s.terrain, stop, spec.footprint_radius_m));
+    true_WS.push_back(perception::sensorOnBody(true_WB.back(), spec.mount));
+  }
+  const std::vector<perception::OdometryStep> steps = measuredSteps(true_WB, spec.odometry, sc.seed);
+  for (const Eigen::Isometry3d& T : deadReckoning(true_WB, steps))
+    believed_WS.push_back(perception::sensorOnBody(T, spec.mount));
+  // The rover.
+  perception::LocaliserConfig config;
+  config.reference = referenceOf(spec.reg);
+  config.mount = spec.mount;
+  config.corridor = corridorGrid(stops, map, spec.mount);
+  config.region_x_m = map.x_m;
+  config.region_y_m = map.y_m;
+  config.map = map.scanToMapConfig();
+  config.registration = registrationConfig(sc);
+  const auto paper = paperMethod(spec.method);
+  if (!paper) throw ScenarioError(sc.file.string() + ": traverse.method: the Open3D peers do not run in a traverse yet");
+  config.weighted_maps = perception::readsWeightedMaps(*paper);
+  config.covariance_calibrated = covarianceCalibrated(spec.method, sc.sensor);
+  const perception::RegistrationMethod method = *paper;
+  perception::Localiser rover(config, [method](const perception::ReferenceView& view, const perception::ScanMap& scan,
+                                               const Eigen::Isometry3d& believed, const perception::RegistrationConfig& c) {
+    return perception::registerViews(view, scan, believed, method, c);
+  });
+  const sim::ErimScanner scanner(*s.scene, sc.sensor);
+  base::Stopwatch total;
+  const MatchingSpec success = sc.matching ? *sc.matching : MatchingSpec{};
+  int accepted = 0, rejected = 0, false_accepts = 0, false_rejects = 0;
+  std::vector<std::optional<StopScore>> scores(stops.size());
+  for (std::size_t k = 0; k < stops.size(); ++k) {
+    const sim::Scan scan = scanner.scan(true_WS[k], base::viewSeed(sc.seed, int(k)));
+    const Eigen::Matrix3d tilt = perception::tiltOf(true_WB[k].linear());
+    const perception::StopEstimate& e = k == 0 ? rover.start(scan.image, sc.sensor, true_WB[0])
+                                              : rover.step(scan.image, sc.sensor, steps[k], tilt);
+    s.addTime("traverse", e.seconds_map + e.seconds_register + e.seconds_merge);
+    std::string verdict;
+    if (e.registered) {
+      const Eigen::Isometry3d est_rel = rover.stops()[k - 1].estimated_WS.inverse() * e.registration->corrected_WS;
+      const perception::PoseError err = perception::poseError(true_WS[k - 1].inverse() * true_WS[k], est_rel);
+      const bool ok = isSuccess(err, success);
+      scores[k] = StopScore{err, ok};
+      e.accepted ? ++accepted : ++rejected;
+      false_accepts += e.accepted && !ok;
+      false_rejects += !e.accepted && ok;
+      verdict = std::string(e.accepted ? "accepted" : "rejected") + (e.accepted && !ok ? " (a false accept)" : "");
+    }
+    const perception::PoseError drift = perception::poseError(true_WS[k], e.estimated_WS);
+    char line[200];
+    std::snprintf(line, sizeof line, "traverse  stop %zu/%zu at %.1f m: error %.3f m %.2f deg %s", k + 1, stops.size(),
+                  stops[k].distance_m, drift.translation_m, drift.rotation_deg, verdict.c_str());
+    s.say(line);
+  }
+  const double seconds = total.seconds();
+  // Scores.
+  std::vector<Eigen::Isometry3d> est_WS;
+  for (const perception::StopEstimate& e : rover.stops()) est_WS.push_back(e.estimated_WS);
+  std::filesystem::create_directories(s.out / "traverse");
+  std::filesystem::create_directories(s.out / "maps");
+  writePoses(s.out / "traverse" / "poses.csv", stops, true_WS, believed_WS, rover.stops(), scores);
+  nlohmann::ordered_json t;
+  t["stops"] = stops.size();
+  t["distance_m"] = stops.back().distance_m;
+  t["register"] = traverseRegisterName(spec.reg);
+  t["method"] = matchMethodName(spec.method);
+  if (stops.size() >= 2) {
+    const TrajectoryErrors est = trajectoryErrors(true_WS, est_WS);
+    const TrajectoryErrors dr = trajectoryErrors(true_WS, believed_WS);
+    t["final_drift_pct"] = jsonNumber(est.final_drift_pct);
+    t["dead_reckoning_drift_pct"] = jsonNumber(dr.final_drift_pct);
+    const nlohmann::ordered_json ej = toJson(est), dj = toJson(dr);
+    t["ate_rms_m"] = ej["ate_rms_m"];
+    t["ate_max_m"] = ej["ate_max_m"];
+    t["rte_pct"] = ej["rte_pct"];
+    t["rotation_deg_per_m"] = ej["rotation_deg_per_m"];
+    t["segments"] = ej["segments"];
+    t["dead_reckoning"] = dj;
+  }
+  t["accepted"] = accepted;
+  t["rejected"] = rejected;
+  t["false_accepts"] = false_accepts;
+  t["false_rejects"] = false_rejects;
+  t["seconds_per_stop"] = seconds / double(stops.size());
+  // The composite over the corridor against the truth; visible where some stop's sensor saw the
+  // true surface.
+  const perception::ElevationMap& composite = rover.composite();
+  const perception::ElevationMap truth = s.truth->elevation(composite.grid());
+  perception::Raster<std::uint8_t> visible =
+      perception::Raster<std::uint8_t>::Zero(composite.grid().rows, composite.grid().cols);
+  const auto V = std::uint8_t(sim::Visibility::Visible), H = std::uint8_t(sim::Visibility::Hidden);
+  for (std::size_t k = 0; k < stops.size(); ++k) {
+    const perception::CorridorWindow w = rover.window(true_WS[k]);
+    if (w.grid.rows == 0 || w.grid.cols == 0) continue;
+    const perception::Raster<std::uint8_t> vis =
+        s.truth->visibility(perception::cropMap(truth, w), true_WS[k], sc.sensor);
+    for (int r = 0; r < w.grid.rows; ++r)
+      for (int c = 0; c < w.grid.cols; ++c) {
+        std::uint8_t& a = visible(w.row0 + r, w.col0 + c);
+        const std::uint8_t b = vis(r, c);
+        a = (a == V || b == V) ? V : (a == H || b == H) ? H : std::uint8_t(sim::Visibility::OutOfView);
+      }
+  }
+  const MapMetrics m = mapMetrics(composite, truth, visible);
+  t["composite"] = compositeJson(m, int(stops.size()), "traverse");
+  s.metrics["traverse"] = t;
+  std::vector<double> distance;
+  for (const PathStop& stop : stops) distance.push_back(stop.distance_m);
+  writePathsPicture(s.out / "traverse" / "paths.png", truth, true_WS, believed_WS, est_WS,
+                    sc.name + ": paths (true, dead reckoning, estimate)");
+  writeErrorPlot(s.out / "traverse" / "error.png", distance, true_WS, believed_WS, est_WS,
+                 sc.name + ": position error against distance");
+  writeMapFiles(s.out / "maps", "composite", composite, &truth,
+                sc.name + ": composite of a " + base::shortestText(stops.back().distance_m) + " m traverse", s.geo);
+  const auto number = [&](const char* key) { return t.contains(key) && t[key].is_number() ? t[key].get<double>() : NAN; };
+  char line[240];
+  std::snprintf(line, sizeof line,
+                "traverse  %zu stops, %.0f m: final drift %.2f%% (dead reckoning %.2f%%), %d accepted, %d rejected; "
+                "composite RMS error %.4f m, within 1σ %.0f%%",
+                stops.size(), stops.back().distance_m, number("final_drift_pct"), number("dead_reckoning_drift_pct"),
+                accepted, rejected, m.rms_error_m, 100 * m.within_1sigma);
+  s.say(line);
+  s.composite = composite;
+}
+
+}  // namespace
+
+Stage traverse() {
+  return {"traverse", [](const Scenario& sc) { return sc.traverse.has_value(); }, run};
+}
+
+}  // namespace ambler::eval::stages
