@@ -35,4 +35,10 @@ nlohmann::ordered_json benchMatch(const Scenario& scenario, const BenchOptions& 
 // square) and at 2 cm (a 2 m square); medians on one thread and on all cores. Prints a table.
 nlohmann::ordered_json benchFootfall(const BenchOptions& options);
 
+// The traverse benchmark: the scenario (a traverse section) run whole `repetitions` times into a
+// temporary directory; the median seconds of the run and of its traverse stage (the rover's loop:
+// each stop mapped, registered and merged), and the process's peak resident memory. Throws
+// std::runtime_error when the scenario has no traverse. Prints a table.
+nlohmann::ordered_json benchTraverse(const Scenario& scenario, const BenchOptions& options);
+
 }  // namespace ambler::eval

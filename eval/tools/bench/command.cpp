@@ -1,4 +1,4 @@
-// `ambler bench scan|map|match|footfall` (docs/benchmarks.md): speed, as tables of medians.
+// `ambler bench scan|map|match|footfall|traverse` (docs/benchmarks.md): speed, as tables of medians.
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <memory>
@@ -40,6 +40,10 @@ void addBenchCommands(CLI::App& app, Commands& out) {
                                  "scenario's first pair.",
                         [scenario](const BenchOptions& opt) { benchMatch(loadScenario(*scenario), opt); });
   match->add_option("--scenario", *scenario, "A scenario with map and matching sections")->capture_default_str();
+  auto traverse = std::make_shared<std::string>("scenarios/traverse.yaml");
+  CLI::App* trav = add("traverse", "A traverse run whole: seconds per run and per stop of the rover's loop, peak memory.",
+                       [traverse](const BenchOptions& opt) { benchTraverse(loadScenario(*traverse), opt); });
+  trav->add_option("--scenario", *traverse, "A scenario with a traverse section")->capture_default_str();
   add("footfall", "Footfall evaluation, all methods dense over 10 000 candidates at 10 and 2 cm (1 thread and all cores).",
       benchFootfall);
 }
