@@ -79,7 +79,7 @@ Assessment assessRegistration(const ElevationMap& map1, const LocusMapper& image
   } else if (a.overlap > 6) {
     const IconicError e = iconicError(map1, image2, nu, true);
     const MapGrid& g = map1.grid();
-    d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell));
+    d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell), knownCentroid(map1));
   }
   a.degenerate = d.degenerate;
   a.free_directions = d.free_directions;

@@ -106,7 +106,8 @@ double medianSigma(const ElevationMap& map) {
   return std::max(1e-3, double(s[s.size() / 2]));
 }
 
-// The mean of map 1's known cells (x, y, z): where the overlap's weight is.
+}  // namespace
+
 Eigen::Vector3d knownCentroid(const ElevationMap& map) {
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   long n = 0;
@@ -120,12 +121,14 @@ Eigen::Vector3d knownCentroid(const ElevationMap& map) {
   return n ? Eigen::Vector3d(sum / double(n)) : sum;
 }
 
+namespace {
+
 // e: the plain error at the estimate, with image 2's normals (iconicError's defaults).
 void finishResult(IconicResult& res, const ElevationMap& map1, const IconicError& e) {
   res.overlap = e.overlap;
   // Rotations weigh as the motion they give at half the map's diagonal.
   const MapGrid& g = map1.grid();
-  const Degeneracy d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell));
+  const Degeneracy d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell), knownCentroid(map1));
   res.degenerate = d.degenerate;
   res.free_directions = d.free_directions;
   if (e.overlap > 6 && !d.degenerate) {
@@ -152,9 +155,16 @@ double stepMahalanobis2(const IconicError& e, double sigma2) {
 }
 
 Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio) {
+  return degeneracy(JtJ, length_m, Eigen::Vector3d::Zero(), ratio);
+}
+
+Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, const Eigen::Vector3d& pivot, double ratio) {
+  Matrix6d A = Matrix6d::Identity();
+  A.block<3, 3>(3, 0) = skew(pivot);  // rotations about the pivot
   PoseVector s;
-  s << 1 / length_m, 1 / length_m, 1 / length_m, 1, 1, 1;  // ν = S·μ with μ in metres
-  const Matrix6d M = s.asDiagonal() * JtJ * s.asDiagonal();
+  s << 1 / length_m, 1 / length_m, 1 / length_m, 1, 1, 1;  // and in metres at length_m
+  const Matrix6d AS = A * s.asDiagonal();
+  const Matrix6d M = AS.transpose() * JtJ * AS;
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(M);
   const double top = eig.eigenvalues()(5);
   static const char* kNames[6] = {"rx", "ry", "rz", "tx", "ty", "tz"};
@@ -605,7 +615,7 @@ IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2,
       sumLines(sampleLines(map1, image2, res.nu, true, &normals, 1, false, &hints, &res.residuals_u), 0.0);
   res.overlap = e.overlap;
   const MapGrid& g = map1.grid();
-  const Degeneracy d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell));
+  const Degeneracy d = degeneracy(e.JtJ, 0.5 * std::hypot(g.cols * g.cell, g.rows * g.cell), knownCentroid(map1));
   res.degenerate = d.degenerate;
   res.free_directions = d.free_directions;
   if (e.overlap > 6 && !d.degenerate)

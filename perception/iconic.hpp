@@ -142,6 +142,14 @@ struct Degeneracy {
 // (σ at least 1/√ratio, 100 times, the best-determined direction's by default); each is named by
 // its largest component. A level plane leaves tx, ty and rz free; a sinusoid along x leaves ty.
 Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, double ratio = 1e-4);
+// The same with the rotations taken about `pivot` (map 1's frame) instead of its origin: ν = A·μ,
+// μ = (r, t′), t = t′ + pivot × r. A rotation about a far-away origin drags a translation of its
+// lever arm with it, and JᵀJ's eigenvalues then depend on where the map lies in its frame, not
+// only on its shape; about the map's own centroid (knownCentroid) they do not. The names are μ's.
+Degeneracy degeneracy(const Matrix6d& JtJ, double length_m, const Eigen::Vector3d& pivot, double ratio = 1e-4);
+
+// The mean (x, y, z) of a map's known cells in its frame (the origin when none is known).
+Eigen::Vector3d knownCentroid(const ElevationMap& map);
 
 // The paper's gradient descent (eq. 4), ν ← ν − K·∂E/∂ν, with the gain K = k·A·diag(AᵀHA)⁻¹·Aᵀ:
 // ν = A·μ takes rotations about the centroid of map 1's known cells, and each μ_i steps on its own
