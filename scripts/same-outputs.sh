@@ -27,7 +27,7 @@ if [ ! -x "$cache/build/ambler" ]; then
 fi
 
 # The same inputs for both: this tree's scenario files.
-# Every single-run scenario in scenarios/ (a file with views:, not a sweep's base/axes), one sweep
+# Every single-run scenario in scenarios/ (a file with views: or traverse:, not a sweep's base/axes), one sweep
 # with every run directory kept, and a basin on a small grid.
 run_all() {  # $1 = ambler binary, $2 = output directory
   rm -rf "$2"; mkdir -p "$2"
@@ -35,7 +35,7 @@ run_all() {  # $1 = ambler binary, $2 = output directory
   while IFS= read -r f; do
     name=${f#scenarios/}; name=${name%.yaml}; name=${name//\//_}
     "$1" run "$f" --out "$2/$name" --quiet
-  done < <(grep -l '^views:' $(find scenarios -name '*.yaml' | sort))
+  done < <(grep -lE '^(views|traverse):' $(find scenarios -name '*.yaml' | sort))
   "$1" sweep scenarios/sweeps/noise_check.yaml --out "$2/sweep" --keep all --quiet
   "$1" basin scenarios/experiments/basin_rocks.yaml --out "$2/basin" --quiet \
     --translation-m 0,0.5 --rotation-deg 0,5 --trials 2
@@ -52,8 +52,9 @@ run_all "$cache/build/ambler" "$out/before"
 echo "same-outputs: running this tree" >&2
 run_all "$root/build/ambler" "$out/after"
 
-# The measured times: timing_s, a registration's time_s (in metrics.json and matching/*.json).
-untimed='del(.timing_s) | del(.time_s) | if .registration then .registration |= map(del(.time_s)) else . end'
+# The measured times: timing_s, a registration's time_s (in metrics.json and matching/*.json), a
+# traverse's seconds_per_stop.
+untimed='del(.timing_s) | del(.time_s) | del(.traverse.seconds_per_stop) | if .registration then .registration |= map(del(.time_s)) else . end'
 status=0
 while IFS= read -r f; do
   a=$out/before/$f b=$out/after/$f

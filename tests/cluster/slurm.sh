@@ -159,6 +159,18 @@ else
   fail=1
 fi
 
+# A sweep of traverses, sharded the same way.
+mkdir -p "$tmp/traverse"
+traverse=$here/traverse.yaml
+if submit traverse "$src/docs/examples/sweep.sbatch" "$traverse" runs; then
+  echo "slurm: traverse job array done after $(elapsed)"
+  "$ambler" sweep "$traverse" --out "$tmp/traverse/runs" --merge --quiet || fail=1
+  "$ambler" sweep "$traverse" --out "$tmp/traverse/whole" --quiet || fail=1
+  same_bytes traverse "$tmp/traverse/whole/results.csv" "$tmp/traverse/runs/results.csv" || fail=1
+else
+  fail=1
+fi
+
 # The basin, as docs/basin.md says.
 mkdir -p "$tmp/basin"
 scenario=$here/basin.yaml

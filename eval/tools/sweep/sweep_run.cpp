@@ -35,8 +35,8 @@ using namespace sweep_detail;
 using Row = std::vector<std::pair<std::string, std::string>>;  // column, cell text
 
 // The scalar leaves of metrics.json in document order, arrays by index: map.0.rms_error_m. The
-// measured times (timing_s, and time_s of each registration) only with `timing`: they are the
-// figures that are not reproducible.
+// measured times (timing_s, time_s of each registration and a traverse's seconds_per_stop) only
+// with `timing`: they are the figures that are not reproducible.
 void flatten(const nlohmann::ordered_json& j, const std::string& path, bool timing, Row& out) {
   // A registration's reject_reasons (a list of texts, empty when accepted) is one cell, "; "
   // between them, so that every run has the same columns.
@@ -51,8 +51,10 @@ void flatten(const nlohmann::ordered_json& j, const std::string& path, bool timi
     std::size_t i = 0;
     for (auto it = j.begin(); it != j.end(); ++it, ++i) {
       const std::string key = j.is_object() ? it.key() : std::to_string(i);
-      if (!timing && ((path.empty() && key == "timing_s") || (key == "time_s" && path.rfind("registration.", 0) == 0)))
-        continue;
+      const bool measured_time = (path.empty() && key == "timing_s") ||
+                                 (key == "time_s" && path.rfind("registration.", 0) == 0) ||
+                                 (path == "traverse" && key == "seconds_per_stop");
+      if (!timing && measured_time) continue;
       flatten(*it, path.empty() ? key : path + "." + key, timing, out);
     }
     return;
