@@ -165,7 +165,13 @@ TraverseSpec readTraverse(const Reader& reader, const YAML::Node& node, const te
   const std::string reg = f.choice("register", {"composite", "previous", "none"}, traverseRegisterName(t.reg));
   t.reg = reg == "composite" ? TraverseRegister::Composite
                              : (reg == "previous" ? TraverseRegister::Previous : TraverseRegister::None);
-  if (const auto method = f.get("method")) t.method = readMatchMethod(reader, *method, f.pathOf("method"));
+  if (const auto method = f.get("method")) {
+    t.method = readMatchMethod(reader, *method, f.pathOf("method"));
+    if (!paperMethod(t.method))
+      reader.fail(f.pathOf("method"), std::string("the Open3D peers do not register a traverse yet (they match two scans' "
+                                                  "returns, not a view against the composite); got ") +
+                                          matchMethodName(t.method));
+  }
   return t;
 }
 

@@ -132,7 +132,7 @@ void run(RunState& s) {
   config.map = map.scanToMapConfig();
   config.registration = registrationConfig(sc);
   const auto paper = paperMethod(spec.method);
-  if (!paper) throw ScenarioError(sc.file.string() + ": traverse.method: the Open3D peers do not run in a traverse yet");
+  if (!paper) throw std::logic_error("traverse stage: a peer method (the reader refuses it)");
   config.weighted_maps = perception::readsWeightedMaps(*paper);
   config.covariance_calibrated = covarianceCalibrated(spec.method, sc.sensor);
   const perception::RegistrationMethod method = *paper;
