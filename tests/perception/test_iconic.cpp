@@ -403,15 +403,16 @@ TEST(Iconic, PaperDescentWithThePrintedSignClimbs) {
 // ν = A·μ exactly, and its verdict is the same as near the origin.
 TEST(Iconic, DegeneracyAboutTheCentroidDoesNotDependOnWhereTheMapLies) {
   const double A = 0.1, k = 2 * M_PI;
-  const auto jtj = [&](const Eigen::Vector3d& shift, Eigen::Vector3d* centroid) {
+  // The rows over the sinusoid along x (and along y too when `both`), moved by `shift`.
+  const auto jtj = [&](bool both, const Eigen::Vector3d& shift, Eigen::Vector3d* centroid) {
     Matrix6d H = Matrix6d::Zero();
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     long n_points = 0;
     for (double x = -3; x <= 3; x += 0.1)
       for (double y = 1.5; y <= 8; y += 0.1) {
-        const double zx = A * k * std::cos(k * x), zy = A * k * std::cos(k * y);
-        const Eigen::Vector3d p = Eigen::Vector3d(x, y, A * std::sin(k * x) + A * std::sin(k * y)) + shift;
-        const Eigen::Vector3d n = Eigen::Vector3d(-zx, -zy, 1).normalized();
+        const double zx = A * k * std::cos(k * x), zy = both ? A * k * std::cos(k * y) : 0.0;
+        const double z = A * std::sin(k * x) + (both ? A * std::sin(k * y) : 0.0);
+        const Eigen::Vector3d p = Eigen::Vector3d(x, y, z) + shift, n = Eigen::Vector3d(-zx, -zy, 1).normalized();
         Eigen::Matrix<double, 6, 1> J;
         J << p.cross(n), n;
         H += J * J.transpose();
@@ -422,35 +423,19 @@ TEST(Iconic, DegeneracyAboutTheCentroidDoesNotDependOnWhereTheMapLies) {
     return H;
   };
   const double half_diagonal = 0.5 * std::hypot(6.0, 6.5);
+  const Eigen::Vector3d far_away(40, 0, 0);
   Eigen::Vector3d c0, c1;
-  const Matrix6d near = jtj(Eigen::Vector3d::Zero(), &c0), far = jtj(Eigen::Vector3d(40, 0, 0), &c1);
+  const Matrix6d near = jtj(true, Eigen::Vector3d::Zero(), &c0), far = jtj(true, far_away, &c1);
   ASSERT_FALSE(degeneracy(near, half_diagonal, c0).degenerate);
   EXPECT_FALSE(degeneracy(far, half_diagonal, c1).degenerate);
   // About the far map's origin the lever arm makes the same shape read as degenerate.
   EXPECT_TRUE(degeneracy(far, half_diagonal).degenerate);
   // And the sinusoid along x alone keeps its one free direction, ty, wherever it lies.
-  const auto along_x = [&](const Eigen::Vector3d& shift, Eigen::Vector3d* centroid) {
-    Matrix6d H = Matrix6d::Zero();
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    long n_points = 0;
-    for (double x = -3; x <= 3; x += 0.1)
-      for (double y = 1.5; y <= 8; y += 0.1) {
-        const Eigen::Vector3d p = Eigen::Vector3d(x, y, A * std::sin(k * x)) + shift;
-        const Eigen::Vector3d n = Eigen::Vector3d(-A * k * std::cos(k * x), 0, 1).normalized();
-        Eigen::Matrix<double, 6, 1> J;
-        J << p.cross(n), n;
-        H += J * J.transpose();
-        sum += p;
-        ++n_points;
-      }
-    *centroid = sum / double(n_points);
-    return H;
-  };
-  const Matrix6d sx = along_x(Eigen::Vector3d(40, 0, 0), &c1);
-  const Degeneracy d = degeneracy(sx, half_diagonal, c1);
+  const Degeneracy d = degeneracy(jtj(false, far_away, &c1), half_diagonal, c1);
   EXPECT_TRUE(d.degenerate);
   EXPECT_EQ(d.free_directions, std::vector<std::string>{"ty"});
 }
+
 
 }  // namespace
 }  // namespace ambler::perception

@@ -107,22 +107,31 @@ void writePoses(const std::filesystem::path& file, const std::vector<PathStop>& 
   writeText(file, csv);
 }
 
-void run(RunState& s) {
-  const Scenario& sc = s.scenario;
+// The truth of a traverse: its stops, the body's and the sensor's true poses on the terrain,
+// odometry's measured steps and dead reckoning's sensor poses.
+struct Truth {
+  std::vector<PathStop> stops;
+  std::vector<Eigen::Isometry3d> true_WB, true_WS, believed_WS;
+  std::vector<perception::OdometryStep> steps;
+};
+
+Truth makeTruth(const RunState& s, const TraverseSpec& spec) {
+  if (!s.terrain) throw std::logic_error("traverse stage: no terrain (the reader refuses an MJCF world in a traverse)");
+  Truth t;
+  t.stops = stopsAlongPath(spec.waypoints_xy_m, spec.stop_spacing_m);
+  for (const PathStop& stop : t.stops) {
+    t.true_WB.push_back(bodyPoseOnTerrain(*s.terrain, stop, spec.footprint_radius_m));
+    t.true_WS.push_back(perception::sensorOnBody(t.true_WB.back(), spec.mount));
+  }
+  t.steps = measuredSteps(t.true_WB, spec.odometry, s.scenario.seed);
+  for (const Eigen::Isometry3d& T : deadReckoning(t.true_WB, t.steps))
+    t.believed_WS.push_back(perception::sensorOnBody(T, spec.mount));
+  return t;
+}
+
+perception::LocaliserConfig localiserConfig(const Scenario& sc, const std::vector<PathStop>& stops) {
   const TraverseSpec& spec = *sc.traverse;
   const MapSpec map = sc.map ? *sc.map : MapSpec{};
-  // The truth: stops, body and sensor poses on the true terrain; odometry's steps.
-  if (!s.terrain) throw std::logic_error("traverse stage: no terrain (the reader refuses an MJCF world in a traverse)");
-  const std::vector<PathStop> stops = stopsAlongPath(spec.waypoints_xy_m, spec.stop_spacing_m);
-  std::vector<Eigen::Isometry3d> true_WB, true_WS, believed_WS;
-  for (const PathStop& stop : stops) {
-    true_WB.push_back(bodyPoseOnTerrain(*s.terrain, stop, spec.footprint_radius_m));
-    true_WS.push_back(perception::sensorOnBody(true_WB.back(), spec.mount));
-  }
-  const std::vector<perception::OdometryStep> steps = measuredSteps(true_WB, spec.odometry, sc.seed);
-  for (const Eigen::Isometry3d& T : deadReckoning(true_WB, steps))
-    believed_WS.push_back(perception::sensorOnBody(T, spec.mount));
-  // The rover.
   perception::LocaliserConfig config;
   config.reference = referenceOf(spec.reg);
   config.mount = spec.mount;
@@ -135,81 +144,76 @@ void run(RunState& s) {
   if (!paper) throw std::logic_error("traverse stage: a peer method (the reader refuses it)");
   config.weighted_maps = perception::readsWeightedMaps(*paper);
   config.covariance_calibrated = covarianceCalibrated(spec.method, sc.sensor);
-  const perception::RegistrationMethod method = *paper;
-  perception::Localiser rover(config, [method](const perception::ReferenceView& view, const perception::ScanMap& scan,
-                                               const Eigen::Isometry3d& believed, const perception::RegistrationConfig& c) {
-    return perception::registerViews(view, scan, believed, method, c);
-  });
-  const sim::ErimScanner scanner(*s.scene, sc.sensor);
-  base::Stopwatch total;
-  const MatchingSpec success = sc.matching ? *sc.matching : MatchingSpec{};
+  return config;
+}
+
+// The verdicts against the truth.
+struct Verdicts {
   int accepted = 0, rejected = 0, false_accepts = 0, false_rejects = 0;
-  std::vector<std::optional<StopScore>> scores(stops.size());
-  for (std::size_t k = 0; k < stops.size(); ++k) {
-    const sim::Scan scan = scanner.scan(true_WS[k], base::viewSeed(sc.seed, int(k)));
-    const Eigen::Matrix3d tilt = perception::tiltOf(true_WB[k].linear());
-    const perception::StopEstimate& e = k == 0 ? rover.start(scan.image, sc.sensor, true_WB[0])
-                                              : rover.step(scan.image, sc.sensor, steps[k], tilt);
+  std::vector<std::optional<StopScore>> scores;  // per stop, when a registration ran
+};
+
+// The rover's walk: one scan per stop from the true pose, fed to the Localiser with odometry's
+// step and the true tilt; each registration scored as it comes.
+Verdicts walk(RunState& s, const Truth& truth, perception::Localiser& rover) {
+  const Scenario& sc = s.scenario;
+  const sim::ErimScanner scanner(*s.scene, sc.sensor);
+  const MatchingSpec success = sc.matching ? *sc.matching : MatchingSpec{};
+  Verdicts v;
+  v.scores.resize(truth.stops.size());
+  for (std::size_t k = 0; k < truth.stops.size(); ++k) {
+    const sim::Scan scan = scanner.scan(truth.true_WS[k], base::viewSeed(sc.seed, int(k)));
+    const Eigen::Matrix3d tilt = perception::tiltOf(truth.true_WB[k].linear());
+    const perception::StopEstimate& e = k == 0 ? rover.start(scan.image, sc.sensor, truth.true_WB[0])
+                                              : rover.step(scan.image, sc.sensor, truth.steps[k], tilt);
     s.addTime("traverse", e.seconds_map + e.seconds_register + e.seconds_merge);
     std::string verdict;
     if (e.registered) {
       const Eigen::Isometry3d est_rel = rover.stops()[k - 1].estimated_WS.inverse() * e.registration->corrected_WS;
-      const perception::PoseError err = perception::poseError(true_WS[k - 1].inverse() * true_WS[k], est_rel);
+      const perception::PoseError err =
+          perception::poseError(truth.true_WS[k - 1].inverse() * truth.true_WS[k], est_rel);
       const bool ok = isSuccess(err, success);
-      scores[k] = StopScore{err, ok};
-      e.accepted ? ++accepted : ++rejected;
-      false_accepts += e.accepted && !ok;
-      false_rejects += !e.accepted && ok;
+      v.scores[k] = StopScore{err, ok};
+      e.accepted ? ++v.accepted : ++v.rejected;
+      v.false_accepts += e.accepted && !ok;
+      v.false_rejects += !e.accepted && ok;
       verdict = std::string(e.accepted ? "accepted" : "rejected") + (e.accepted && !ok ? " (a false accept)" : "");
     }
-    const perception::PoseError drift = perception::poseError(true_WS[k], e.estimated_WS);
+    const perception::PoseError drift = perception::poseError(truth.true_WS[k], e.estimated_WS);
     char line[200];
-    std::snprintf(line, sizeof line, "traverse  stop %zu/%zu at %.1f m: error %.3f m %.2f deg %s", k + 1, stops.size(),
-                  stops[k].distance_m, drift.translation_m, drift.rotation_deg, verdict.c_str());
+    std::snprintf(line, sizeof line, "traverse  stop %zu/%zu at %.1f m: error %.3f m %.2f deg %s", k + 1,
+                  truth.stops.size(), truth.stops[k].distance_m, drift.translation_m, drift.rotation_deg, verdict.c_str());
     s.say(line);
   }
-  const double seconds = total.seconds();
-  // Scores.
-  std::vector<Eigen::Isometry3d> est_WS;
-  for (const perception::StopEstimate& e : rover.stops()) est_WS.push_back(e.estimated_WS);
-  std::filesystem::create_directories(s.out / "traverse");
-  std::filesystem::create_directories(s.out / "maps");
-  writePoses(s.out / "traverse" / "poses.csv", stops, true_WS, believed_WS, rover.stops(), scores);
+  return v;
+}
+
+// metrics.traverse's pose figures: the estimate's and dead reckoning's against the truth.
+nlohmann::ordered_json trajectoryJson(const Truth& truth, const std::vector<Eigen::Isometry3d>& est_WS) {
   nlohmann::ordered_json t;
-  t["stops"] = stops.size();
-  t["distance_m"] = stops.back().distance_m;
-  t["register"] = traverseRegisterName(spec.reg);
-  t["method"] = matchMethodName(spec.method);
-  if (stops.size() >= 2) {
-    const TrajectoryErrors est = trajectoryErrors(true_WS, est_WS);
-    const TrajectoryErrors dr = trajectoryErrors(true_WS, believed_WS);
-    t["final_drift_pct"] = jsonNumber(est.final_drift_pct);
-    t["dead_reckoning_drift_pct"] = jsonNumber(dr.final_drift_pct);
-    const nlohmann::ordered_json ej = toJson(est), dj = toJson(dr);
-    t["ate_rms_m"] = ej["ate_rms_m"];
-    t["ate_max_m"] = ej["ate_max_m"];
-    t["rte_pct"] = ej["rte_pct"];
-    t["rotation_deg_per_m"] = ej["rotation_deg_per_m"];
-    t["segments"] = ej["segments"];
-    t["dead_reckoning"] = dj;
-  }
-  t["accepted"] = accepted;
-  t["rejected"] = rejected;
-  t["false_accepts"] = false_accepts;
-  t["false_rejects"] = false_rejects;
-  t["seconds_per_stop"] = seconds / double(stops.size());
-  // The composite over the corridor against the truth; visible where some stop's sensor saw the
-  // true surface.
-  const perception::ElevationMap& composite = rover.composite();
-  const perception::ElevationMap truth = s.truth->elevation(composite.grid());
-  perception::Raster<std::uint8_t> visible =
-      perception::Raster<std::uint8_t>::Zero(composite.grid().rows, composite.grid().cols);
+  if (truth.stops.size() < 2) return t;
+  const TrajectoryErrors est = trajectoryErrors(truth.true_WS, est_WS);
+  const TrajectoryErrors dr = trajectoryErrors(truth.true_WS, truth.believed_WS);
+  t["final_drift_pct"] = jsonNumber(est.final_drift_pct);
+  t["dead_reckoning_drift_pct"] = jsonNumber(dr.final_drift_pct);
+  const nlohmann::ordered_json ej = toJson(est);
+  for (const char* key : {"ate_rms_m", "ate_max_m", "rte_pct", "rotation_deg_per_m", "segments"}) t[key] = ej[key];
+  t["dead_reckoning"] = toJson(dr);
+  return t;
+}
+
+// What some stop's sensor could see of the true surface on the corridor: visible if any stop sees
+// it, else hidden if one holds it behind terrain.
+perception::Raster<std::uint8_t> corridorVisibility(const RunState& s, const Truth& truth,
+                                                    const perception::Localiser& rover,
+                                                    const perception::ElevationMap& true_map) {
+  const perception::MapGrid& g = true_map.grid();
+  perception::Raster<std::uint8_t> visible = perception::Raster<std::uint8_t>::Zero(g.rows, g.cols);
   const auto V = std::uint8_t(sim::Visibility::Visible), H = std::uint8_t(sim::Visibility::Hidden);
-  for (std::size_t k = 0; k < stops.size(); ++k) {
-    const perception::CorridorWindow w = rover.window(true_WS[k]);
+  for (const Eigen::Isometry3d& T : truth.true_WS) {
+    const perception::CorridorWindow w = rover.window(T);
     if (w.grid.rows == 0 || w.grid.cols == 0) continue;
-    const perception::Raster<std::uint8_t> vis =
-        s.truth->visibility(perception::cropMap(truth, w), true_WS[k], sc.sensor);
+    const perception::Raster<std::uint8_t> vis = s.truth->visibility(perception::cropMap(true_map, w), T, s.scenario.sensor);
     for (int r = 0; r < w.grid.rows; ++r)
       for (int c = 0; c < w.grid.cols; ++c) {
         std::uint8_t& a = visible(w.row0 + r, w.col0 + c);
@@ -217,16 +221,52 @@ void run(RunState& s) {
         a = (a == V || b == V) ? V : (a == H || b == H) ? H : std::uint8_t(sim::Visibility::OutOfView);
       }
   }
-  const MapMetrics m = mapMetrics(composite, truth, visible);
+  return visible;
+}
+
+void run(RunState& s) {
+  const Scenario& sc = s.scenario;
+  const TraverseSpec& spec = *sc.traverse;
+  const Truth truth = makeTruth(s, spec);
+  const perception::RegistrationMethod method = *paperMethod(spec.method);
+  perception::Localiser rover(localiserConfig(sc, truth.stops),
+                              [method](const perception::ReferenceView& view, const perception::ScanMap& scan,
+                                       const Eigen::Isometry3d& believed, const perception::RegistrationConfig& c) {
+                                return perception::registerViews(view, scan, believed, method, c);
+                              });
+  base::Stopwatch total;
+  const Verdicts v = walk(s, truth, rover);
+  const double seconds = total.seconds();
+  // Scores.
+  const std::vector<PathStop>& stops = truth.stops;
+  std::vector<Eigen::Isometry3d> est_WS;
+  for (const perception::StopEstimate& e : rover.stops()) est_WS.push_back(e.estimated_WS);
+  std::filesystem::create_directories(s.out / "traverse");
+  std::filesystem::create_directories(s.out / "maps");
+  writePoses(s.out / "traverse" / "poses.csv", stops, truth.true_WS, truth.believed_WS, rover.stops(), v.scores);
+  nlohmann::ordered_json t;
+  t["stops"] = stops.size();
+  t["distance_m"] = stops.back().distance_m;
+  t["register"] = traverseRegisterName(spec.reg);
+  t["method"] = matchMethodName(spec.method);
+  t.update(trajectoryJson(truth, est_WS));
+  t["accepted"] = v.accepted;
+  t["rejected"] = v.rejected;
+  t["false_accepts"] = v.false_accepts;
+  t["false_rejects"] = v.false_rejects;
+  t["seconds_per_stop"] = seconds / double(stops.size());
+  const perception::ElevationMap& composite = rover.composite();
+  const perception::ElevationMap true_map = s.truth->elevation(composite.grid());
+  const MapMetrics m = mapMetrics(composite, true_map, corridorVisibility(s, truth, rover, true_map));
   t["composite"] = compositeJson(m, int(stops.size()), "traverse");
   s.metrics["traverse"] = t;
   std::vector<double> distance;
   for (const PathStop& stop : stops) distance.push_back(stop.distance_m);
-  writePathsPicture(s.out / "traverse" / "paths.png", truth, true_WS, believed_WS, est_WS,
+  writePathsPicture(s.out / "traverse" / "paths.png", true_map, truth.true_WS, truth.believed_WS, est_WS,
                     sc.name + ": paths (true, dead reckoning, estimate)");
-  writeErrorPlot(s.out / "traverse" / "error.png", distance, true_WS, believed_WS, est_WS,
+  writeErrorPlot(s.out / "traverse" / "error.png", distance, truth.true_WS, truth.believed_WS, est_WS,
                  sc.name + ": position error against distance");
-  writeMapFiles(s.out / "maps", "composite", composite, &truth,
+  writeMapFiles(s.out / "maps", "composite", composite, &true_map,
                 sc.name + ": composite of a " + base::shortestText(stops.back().distance_m) + " m traverse", s.geo);
   const auto number = [&](const char* key) { return t.contains(key) && t[key].is_number() ? t[key].get<double>() : NAN; };
   char line[240];
@@ -234,7 +274,7 @@ void run(RunState& s) {
                 "traverse  %zu stops, %.0f m: final drift %.2f%% (dead reckoning %.2f%%), %d accepted, %d rejected; "
                 "composite RMS error %.4f m, within 1σ %.0f%%",
                 stops.size(), stops.back().distance_m, number("final_drift_pct"), number("dead_reckoning_drift_pct"),
-                accepted, rejected, m.rms_error_m, 100 * m.within_1sigma);
+                v.accepted, v.rejected, m.rms_error_m, 100 * m.within_1sigma);
   s.say(line);
   s.composite = composite;
 }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "eval/scenario/scenario.hpp"
+#include "scenario_errors.hpp"
 #include "perception/sensor_geometry.hpp"
 
 namespace ambler::eval {
@@ -22,7 +23,7 @@ namespace fs = std::filesystem;
 using terrains::TerrainKind;
 
 const fs::path kScenarios = fs::path(AMBLER_SOURCE_DIR) / "scenarios";
-const std::string kFile = "scenarios/x.yaml";
+using scenario_test::kFile;
 const std::string kMinimal = "name: t\nterrain: {kind: plane}\nviews: [{xyz_m: [0, 0, 1]}]\n";
 
 double deg(double d) { return d * std::numbers::pi / 180.0; }
@@ -143,24 +144,8 @@ void expectRoundTrip(const Scenario& s) {
   EXPECT_EQ(resolvedYaml(back), resolved);
 }
 
-std::string errorOf(const std::string& yaml) {
-  try {
-    parseScenario(yaml, kFile);
-  } catch (const ScenarioError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-// The message is one line, starts with the file and the exact key path, and says `what`.
-void expectError(const std::string& yaml, const std::string& key_path, const std::string& what) {
-  const std::string message = errorOf(yaml);
-  SCOPED_TRACE(yaml);
-  const std::string prefix = kFile + ": " + (key_path.empty() ? "" : key_path + ": ");
-  EXPECT_EQ(message.rfind(prefix, 0), 0u) << message;
-  EXPECT_NE(message.find(what), std::string::npos) << message;
-  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
-}
+using scenario_test::errorOf;
+using scenario_test::expectError;
 
 // A scratch directory removed at the end of the test.
 struct TempDir {

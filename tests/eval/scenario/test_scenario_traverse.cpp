@@ -12,13 +12,14 @@
 #include <string>
 
 #include "eval/scenario/scenario.hpp"
+#include "scenario_errors.hpp"
 
 namespace ambler::eval {
 namespace {
 
 namespace fs = std::filesystem;
 
-const std::string kFile = "scenarios/x.yaml";
+using scenario_test::kFile;
 // A 70 x 24 m plane (x in [-35, 35], y in [-12, 12]) with a map section; the traverse follows.
 const std::string kHead = "name: t\nterrain: {kind: plane, size_m: [70, 24], cell_m: 0.1}\nmap: {}\n";
 const std::string kLine = "{start_xy_m: [-25, 0], heading_deg: 0, length_m: 50}";
@@ -31,23 +32,8 @@ std::string withPath(const std::string& path, const std::string& more = "") {
 double deg(double d) { return d * std::numbers::pi / 180.0; }
 std::uint64_t bits(double v) { return std::bit_cast<std::uint64_t>(v); }
 
-std::string errorOf(const std::string& yaml) {
-  try {
-    parseScenario(yaml, kFile);
-  } catch (const ScenarioError& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
-
-// The message is one line, starts with the file and the exact key path, and says `what`.
-void expectError(const std::string& yaml, const std::string& key_path, const std::string& what) {
-  const std::string message = errorOf(yaml);
-  SCOPED_TRACE(yaml);
-  EXPECT_EQ(message.rfind(kFile + ": " + key_path + ": ", 0), 0u) << message;
-  EXPECT_NE(message.find(what), std::string::npos) << message;
-  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
-}
+using scenario_test::errorOf;
+using scenario_test::expectError;
 
 // Every field of the two traverses, bit for bit.
 void expectSameTraverse(const TraverseSpec& a, const TraverseSpec& b) {
