@@ -130,17 +130,24 @@ Raster<float> sharedSigma(const ElevationMap& map, const ElevationMap& noise) {
 
 }  // namespace
 
-ElevationMap buildComposite(const std::vector<const ScanMap*>& views, const std::vector<ViewPlacement>& placements,
-                            const MapGrid& grid, const LocusConfig& config) {
-  if (views.size() != placements.size())
-    throw std::invalid_argument("buildComposite: " + std::to_string(views.size()) + " views but " +
-                                std::to_string(placements.size()) + " placements");
+ElevationMap mapForComposite(const ScanMap& scan, const Eigen::Isometry3d& T_WS, const MapGrid& grid,
+                             const LocusConfig& config, Raster<float>& shared) {
   LocusConfig locus = config;
   locus.footprint_sigma = true;  // the footprint's error is shared by every view (docs/composite.md)
   // σ without the terrain's part (docs/locus.md, σ_rough): what is left is the part every view
   // of a cell shares (docs/composite.md).
   LocusConfig noise_only = locus;
   noise_only.roughness = false;
+  ElevationMap map = mapAtPose(scan, T_WS, grid, locus);
+  shared = sharedSigma(map, mapAtPose(scan, T_WS, grid, noise_only));
+  return map;
+}
+
+ElevationMap buildComposite(const std::vector<const ScanMap*>& views, const std::vector<ViewPlacement>& placements,
+                            const MapGrid& grid, const LocusConfig& config) {
+  if (views.size() != placements.size())
+    throw std::invalid_argument("buildComposite: " + std::to_string(views.size()) + " views but " +
+                                std::to_string(placements.size()) + " placements");
   ElevationMap composite(grid);
   Raster<float> composite_shared = Raster<float>::Zero(grid.rows, grid.cols);
   for (std::size_t k = 0; k < views.size(); ++k) {
@@ -149,8 +156,8 @@ ElevationMap buildComposite(const std::vector<const ScanMap*>& views, const std:
     if (!views[k])
       throw std::invalid_argument("buildComposite: view " + std::to_string(k) + " is placed but has no scan");
     // The scan as the rover mapped it (unwrapped, its edges), at the composite's pose for it.
-    ElevationMap map = mapAtPose(*views[k], placement.T_WS, grid, locus);
-    const Raster<float> shared = sharedSigma(map, mapAtPose(*views[k], placement.T_WS, grid, noise_only));
+    Raster<float> shared;
+    ElevationMap map = mapForComposite(*views[k], placement.T_WS, grid, config, shared);
     // Each link's pose covariance, first order and independent: variances add.
     addSigma(map, placementSigma(map, placement.chain));
     mergeInto(composite, composite_shared, map, shared);

@@ -47,6 +47,13 @@ Raster<float> registrationSigma(const ElevationMap& map, const PoseVector& nu, c
 // leaves a cell alone). Throws std::invalid_argument if the sizes differ.
 void addSigma(ElevationMap& map, const Raster<float>& extra);
 
+// A view's map as a composite merges it (docs/composite.md): the scan (its unwrapped image and
+// edges) mapped on `grid` at T_WS (mapAtPose) with `config` and the footprint's term in σ on
+// (LocusConfig::footprint_sigma), and in `shared` the part of each Known cell's σ every view of it
+// shares, σ_rough (the σ the same scan has without roughness taken away in quadrature; 0 elsewhere).
+ElevationMap mapForComposite(const ScanMap& scan, const Eigen::Isometry3d& T_WS, const MapGrid& grid,
+                             const LocusConfig& config, Raster<float>& shared);
+
 // The composite of several views on `grid` (docs/composite.md): each placed view's scan (its
 // unwrapped image and edges) mapped by the locus algorithm straight onto the grid at its
 // placement's pose (mapAtPose), with `config` and the footprint's term in σ on (it is shared by

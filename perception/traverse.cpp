@@ -47,6 +47,15 @@ ElevationMap cropMap(const ElevationMap& map, const CorridorWindow& w) {
   return out;
 }
 
+Eigen::AlignedBox2d regionBox(const Eigen::Vector2d& xy, double heading, const Eigen::Vector2d& region_x,
+                              const Eigen::Vector2d& region_y) {
+  const Eigen::Vector2d f(std::cos(heading), std::sin(heading)), right(std::sin(heading), -std::cos(heading));
+  Eigen::AlignedBox2d box;
+  for (const double x : {region_x.x(), region_x.y()})
+    for (const double y : {region_y.x(), region_y.y()}) box.extend(Eigen::Vector2d(xy + x * right + y * f));
+  return box;
+}
+
 Matrix6d priorNuCovariance(const PriorSigma& prior, const Eigen::Isometry3d& believed_WS) {
   const double r = prior.rotation_deg * M_PI / 180, t = prior.translation_m;
   Matrix6d P_e = Matrix6d::Zero();
@@ -61,21 +70,16 @@ Localiser::Localiser(LocaliserConfig config, Registrar registrar)
   if (!g.inWorldFrame()) throw std::invalid_argument("Localiser: the corridor's grid is not in the world frame");
   if (g.rows <= 0 || g.cols <= 0 || !(g.cell > 0)) throw std::invalid_argument("Localiser: the corridor's grid is empty");
   composite_ = ElevationMap(g);
-  composite_shared_ = Raster<float>::Constant(g.rows, g.cols, std::numeric_limits<float>::quiet_NaN());
+  composite_shared_ = Raster<float>::Zero(g.rows, g.cols);
 }
 
 CorridorWindow Localiser::window(const Eigen::Isometry3d& T_WS) const {
   const MapGrid& g = config_.corridor;
   const Eigen::Vector3d fwd3 = T_WS.linear() * Eigen::Vector3d::UnitY();
   const double heading = std::atan2(fwd3.y(), fwd3.x());
-  const Eigen::Vector2d f(std::cos(heading), std::sin(heading)), right(std::sin(heading), -std::cos(heading));
-  const Eigen::Vector2d p = T_WS.translation().head<2>();
-  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
-  for (const double x : {config_.region_x_m.x(), config_.region_x_m.y()})
-    for (const double y : {config_.region_y_m.x(), config_.region_y_m.y()}) {
-      const Eigen::Vector2d q = p + x * right + y * f;
-      x0 = std::min(x0, q.x()), x1 = std::max(x1, q.x()), y0 = std::min(y0, q.y()), y1 = std::max(y1, q.y());
-    }
+  const Eigen::AlignedBox2d box =
+      regionBox(T_WS.translation().head<2>(), heading, config_.region_x_m, config_.region_y_m);
+  const double x0 = box.min().x(), x1 = box.max().x(), y0 = box.min().y(), y1 = box.max().y();
   // Whole cells outwards, a box edge within 1e-9 cells of a cell edge taken as on it (as
   // MapGrid::covering rounds).
   constexpr double e = 1e-9;
@@ -98,21 +102,8 @@ void Localiser::merge(const ScanMap& scan, const Eigen::Isometry3d& T_WS, const 
   const auto t0 = std::chrono::steady_clock::now();
   const CorridorWindow w = window(T_WS);
   if (w.grid.rows == 0 || w.grid.cols == 0) return;
-  // As buildComposite merges a view: the footprint's term in σ, the part every view shares
-  // (σ without roughness taken away in quadrature), the pose's σ added.
-  LocusConfig locus = config_.map.locus;
-  locus.footprint_sigma = true;
-  LocusConfig noise_only = locus;
-  noise_only.roughness = false;
-  ElevationMap map = mapAtPose(scan, T_WS, w.grid, locus);
-  const ElevationMap noise = mapAtPose(scan, T_WS, w.grid, noise_only);
-  Raster<float> shared = Raster<float>::Constant(w.grid.rows, w.grid.cols, std::numeric_limits<float>::quiet_NaN());
-  for (int r = 0; r < w.grid.rows; ++r)
-    for (int c = 0; c < w.grid.cols; ++c)
-      if (map.stateAt(r, c) == CellState::Known && noise.stateAt(r, c) == CellState::Known) {
-        const float s = map.sigma()(r, c), n = noise.sigma()(r, c);
-        shared(r, c) = std::sqrt(std::max(0.f, s * s - n * n));
-      }
+  Raster<float> shared;
+  ElevationMap map = mapForComposite(scan, T_WS, w.grid, config_.map.locus, shared);
   if (nu_covariance) addSigma(map, registrationSigma(map, nu, *nu_covariance));
   ElevationMap block = cropMap(composite_, w);
   Raster<float> block_shared = composite_shared_.block(w.row0, w.col0, w.grid.rows, w.grid.cols);

@@ -100,6 +100,12 @@ class Localiser {
   std::vector<StopEstimate> stops_;
 };
 
+// The world-aligned box around the region x ∈ region_x (right), y ∈ region_y (forward) of the frame
+// at `xy` facing `heading` (radians from world x): what a stop's window covers before it is put
+// on the corridor's lattice.
+Eigen::AlignedBox2d regionBox(const Eigen::Vector2d& xy, double heading, const Eigen::Vector2d& region_x,
+                              const Eigen::Vector2d& region_y);
+
 // The map's cells inside `window` (same lattice), as a map on the window's grid.
 ElevationMap cropMap(const ElevationMap& map, const CorridorWindow& window);
 

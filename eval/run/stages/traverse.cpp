@@ -17,6 +17,7 @@
 #include "eval/score/map_metrics.hpp"
 #include "eval/score/registration_score.hpp"
 #include "eval/score/trajectory_score.hpp"
+#include "eval/tools/shards.hpp"
 #include "perception/rigid_transform.hpp"
 #include "perception/traverse.hpp"
 
@@ -34,21 +35,18 @@ perception::TraverseReference referenceOf(TraverseRegister r) {
 
 // The corridor: the world-aligned box around every planned stop's mapped region, with a margin
 // for the drift (the rover plans it from the path, not from the truth).
-perception::MapGrid corridorGrid(const std::vector<PathStop>& stops, const MapSpec& map, const perception::Mount& mount) {
+perception::MapGrid corridorGrid(const std::vector<PathStop>& stops, const MapSpec& map) {
   constexpr double kMargin = 3.0;
-  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+  Eigen::AlignedBox2d box;
   for (const PathStop& s : stops) {
-    const Eigen::Vector2d f(std::cos(s.heading_rad), std::sin(s.heading_rad)), right(f.y(), -f.x());
-    for (const double x : {map.x_m.x(), map.x_m.y()})
-      for (const double y : {map.y_m.x(), map.y_m.y(), 0.0}) {
-        const Eigen::Vector2d q = s.xy + x * right + y * f;
-        x0 = std::min(x0, q.x()), x1 = std::max(x1, q.x()), y0 = std::min(y0, q.y()), y1 = std::max(y1, q.y());
-      }
+    box.extend(perception::regionBox(s.xy, s.heading_rad, map.x_m, map.y_m));
+    box.extend(perception::regionBox(s.xy, s.heading_rad, map.x_m, Eigen::Vector2d::Zero()));  // the stop's own line
   }
-  (void)mount;
   const double c = map.cell_m;
-  return perception::MapGrid::covering(std::floor((x0 - kMargin) / c) * c, std::ceil((x1 + kMargin) / c) * c,
-                                       std::floor((y0 - kMargin) / c) * c, std::ceil((y1 + kMargin) / c) * c, c);
+  return perception::MapGrid::covering(std::floor((box.min().x() - kMargin) / c) * c,
+                                       std::ceil((box.max().x() + kMargin) / c) * c,
+                                       std::floor((box.min().y() - kMargin) / c) * c,
+                                       std::ceil((box.max().y() + kMargin) / c) * c, c);
 }
 
 // The scenario's roll, pitch, yaw of a rotation, R = Rz(yaw)·Ry(roll)·Rx(pitch) (docs/conventions.md).
@@ -59,13 +57,11 @@ Eigen::Vector3d rpyOf(const Eigen::Matrix3d& R) {
   return {roll, std::atan2(R(2, 1), R(2, 2)), std::atan2(R(1, 0), R(0, 0))};
 }
 
-// x, y, z and roll, pitch, yaw (degrees, the scenario's convention) of a sensor pose.
-std::string poseCells(const Eigen::Isometry3d& T) {
+// x, y, z and roll, pitch, yaw (degrees, the scenario's convention) of a sensor pose, appended to `cells`.
+void addPoseCells(const Eigen::Isometry3d& T, std::vector<std::string>& cells) {
   const Eigen::Vector3d rpy = rpyOf(T.linear()) * (180 / M_PI);
-  std::string out;
   for (const double x : {T.translation().x(), T.translation().y(), T.translation().z(), rpy.x(), rpy.y(), rpy.z()})
-    out += "," + base::shortestText(x);
-  return out;
+    cells.push_back(base::shortestText(x));
 }
 
 // A stop's registration against the truth: the relative pose it implies from the previous
@@ -75,34 +71,30 @@ struct StopScore {
   bool success = false;
 };
 
-// A CSV cell: quoted when it holds a comma or a quote (RFC 4180).
-std::string csvCell(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string out = "\"";
-  for (const char c : text) out += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return out + "\"";
-}
-
 void writePoses(const std::filesystem::path& file, const std::vector<PathStop>& stops,
                 const std::vector<Eigen::Isometry3d>& truth, const std::vector<Eigen::Isometry3d>& believed,
                 const std::vector<perception::StopEstimate>& est, const std::vector<std::optional<StopScore>>& scores) {
-  std::string csv = "stop,distance_m,accepted";
+  std::vector<std::string> header{"stop", "distance_m", "accepted"};
   for (const char* who : {"true", "believed", "estimated"})
-    for (const char* k : {"x_m", "y_m", "z_m", "roll_deg", "pitch_deg", "yaw_deg"}) csv += std::string(",") + who + "_" + k;
-  csv += ",registration_translation_error_m,registration_rotation_error_deg,success,reject_reasons\n";
+    for (const char* k : {"x_m", "y_m", "z_m", "roll_deg", "pitch_deg", "yaw_deg"}) header.push_back(std::string(who) + "_" + k);
+  for (const char* k : {"registration_translation_error_m", "registration_rotation_error_deg", "success", "reject_reasons"})
+    header.push_back(k);
+  std::string csv = csvLine(header);
   for (std::size_t k = 0; k < stops.size(); ++k) {
-    csv += std::to_string(k) + "," + base::shortestText(stops[k].distance_m) + "," +
-           (est[k].registered ? (est[k].accepted ? "true" : "false") : "") + poseCells(truth[k]) +
-           poseCells(believed[k]) + poseCells(est[k].estimated_WS);
+    std::vector<std::string> cells{std::to_string(k), base::shortestText(stops[k].distance_m),
+                                   est[k].registered ? (est[k].accepted ? "true" : "false") : ""};
+    for (const Eigen::Isometry3d* T : {&truth[k], &believed[k], &est[k].estimated_WS}) addPoseCells(*T, cells);
     if (scores[k]) {
       std::string reasons;
       for (const std::string& r : est[k].registration->assessment.reject_reasons) reasons += (reasons.empty() ? "" : "; ") + r;
-      csv += "," + base::shortestText(scores[k]->error.translation_m) + "," + base::shortestText(scores[k]->error.rotation_deg) +
-             "," + (scores[k]->success ? "true" : "false") + "," + csvCell(reasons);
+      for (const std::string& c : {base::shortestText(scores[k]->error.translation_m),
+                                   base::shortestText(scores[k]->error.rotation_deg),
+                                   std::string(scores[k]->success ? "true" : "false"), reasons})
+        cells.push_back(c);
     } else {
-      csv += ",,,,";
+      cells.insert(cells.end(), 4, "");
     }
-    csv += "\n";
+    csv += csvLine(cells);
   }
   writeText(file, csv);
 }
@@ -135,7 +127,7 @@ perception::LocaliserConfig localiserConfig(const Scenario& sc, const std::vecto
   perception::LocaliserConfig config;
   config.reference = referenceOf(spec.reg);
   config.mount = spec.mount;
-  config.corridor = corridorGrid(stops, map, spec.mount);
+  config.corridor = corridorGrid(stops, map);
   config.region_x_m = map.x_m;
   config.region_y_m = map.y_m;
   config.map = map.scanToMapConfig();

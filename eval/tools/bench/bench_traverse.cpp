@@ -1,7 +1,6 @@
 // `ambler bench traverse` (docs/benchmarks.md): a traverse scenario run whole, repeatedly.
 #include <sys/resource.h>
 
-#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <vector>
@@ -9,19 +8,10 @@
 #include "base/stopwatch.hpp"
 #include "eval/run/runner.hpp"
 #include "eval/scenario/io.hpp"
+#include "eval/score/stats.hpp"
 #include "eval/tools/bench/bench.hpp"
 
 namespace ambler::eval {
-
-namespace {
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-}  // namespace
 
 nlohmann::ordered_json benchTraverse(const Scenario& sc, const BenchOptions& opt) {
   if (!sc.traverse) throw std::runtime_error(sc.file.string() + ": traverse: bench traverse needs a traverse section");
