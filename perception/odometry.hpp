@@ -40,4 +40,16 @@ OdometryStep stepBetween(const Eigen::Isometry3d& from, const Eigen::Isometry3d&
 // integrated). integrate(from, stepBetween(from, to), tiltOf(to)) reproduces `to` to rounding.
 Eigen::Isometry3d integrate(const Eigen::Isometry3d& from, const OdometryStep& step, const Eigen::Matrix3d& tilt);
 
+// What the rover believes of its own localisation error at its last accepted registration, d
+// metres (odometry's count) from the start (docs/traverse.md, "The composite's σ"):
+// each horizontal axis σ = translation_sigma_per_m·d, the height vertical_sigma_per_m·d, the
+// heading heading_sigma_deg_per_sqrt_m·√d. A drift that grows with distance, as a traverse's does
+// (the registrations' errors are not independent steps of a random walk: each new view is tied to
+// the composite of several before it); roll and pitch come from the inclinometer and do not drift.
+struct LocalisationDrift {
+  double translation_sigma_per_m = 0.0033;
+  double vertical_sigma_per_m = 0.0003;
+  double heading_sigma_deg_per_sqrt_m = 0.067;
+};
+
 }  // namespace ambler::perception

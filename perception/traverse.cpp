@@ -64,6 +64,21 @@ Matrix6d priorNuCovariance(const PriorSigma& prior, const Eigen::Isometry3d& bel
   return A_inv * P_e * A_inv.transpose();
 }
 
+Matrix6d driftNuCovariance(const LocalisationDrift& drift, double distance_m, const Eigen::Isometry3d& T_WS) {
+  const double d = std::max(0.0, distance_m);
+  const double h = drift.translation_sigma_per_m * d, v = drift.vertical_sigma_per_m * d;
+  const double yaw = drift.heading_sigma_deg_per_sqrt_m * M_PI / 180 * std::sqrt(d);
+  // The error e in sensor J's frame (rx ry rz tx ty tz, sensorPoseJacobian's): a turn about the
+  // world's z and a translation along the world's axes, both seen from the sensor.
+  const Eigen::Matrix3d Rt = T_WS.linear().transpose();
+  const Eigen::Vector3d z = Rt * Eigen::Vector3d::UnitZ();
+  Matrix6d P_e = Matrix6d::Zero();
+  P_e.topLeftCorner<3, 3>() = yaw * yaw * z * z.transpose();
+  P_e.bottomRightCorner<3, 3>() = Rt * Eigen::Vector3d(h * h, h * h, v * v).asDiagonal() * Rt.transpose();
+  const Matrix6d A_inv = sensorPoseJacobian(PoseVector::Zero(), T_WS).inverse();
+  return A_inv * P_e * A_inv.transpose();
+}
+
 Localiser::Localiser(LocaliserConfig config, Registrar registrar)
     : config_(std::move(config)), registrar_(std::move(registrar)) {
   const MapGrid& g = config_.corridor;
@@ -104,6 +119,8 @@ void Localiser::merge(const ScanMap& scan, const Eigen::Isometry3d& T_WS, const 
   if (w.grid.rows == 0 || w.grid.cols == 0) return;
   Raster<float> shared;
   ElevationMap map = mapForComposite(scan, T_WS, w.grid, config_.map.locus, shared);
+  // The pose's σ enters each view as its own (not as the shared part of docs/composite.md): the
+  // poses of stops a few metres apart drift apart as much as together (docs/traverse.md).
   if (nu_covariance) addSigma(map, registrationSigma(map, nu, *nu_covariance));
   ElevationMap block = cropMap(composite_, w);
   Raster<float> block_shared = composite_shared_.block(w.row0, w.col0, w.grid.rows, w.grid.cols);
@@ -141,8 +158,11 @@ const StopEstimate& Localiser::step(const RangeImage& measured, const SensorMode
   StopEstimate stop;
   stop.predicted_WB = integrate(last.estimated_WB, measured_step, tilt);
   stop.predicted_WS = sensorOnBody(stop.predicted_WB, config_.mount);
-  stop.since_fix_m = (last.accepted || stops_.size() == 1 ? 0.0 : last.since_fix_m) +
-                     std::hypot(measured_step.dx_m, measured_step.dy_m);
+  const double step_m = std::hypot(measured_step.dx_m, measured_step.dy_m);
+  const bool fixed_last = last.accepted || stops_.size() == 1;
+  stop.since_fix_m = (fixed_last ? 0.0 : last.since_fix_m) + step_m;
+  stop.distance_m = last.distance_m + step_m;
+  stop.fix_distance_m = fixed_last ? last.distance_m : last.fix_distance_m;
   auto t0 = std::chrono::steady_clock::now();
   const ScanMap scan = scanToMap(measured, sensor, stop.predicted_WS, window(stop.predicted_WS).grid, config_.map);
   stop.seconds_map = secondsSince(t0);
@@ -160,6 +180,7 @@ const StopEstimate& Localiser::step(const RangeImage& measured, const SensorMode
   PoseVector nu = PoseVector::Zero();
   if (stop.accepted) {
     stop.estimated_WS = stop.registration->corrected_WS;
+    stop.fix_distance_m = stop.distance_m;
     const IconicResult& res = stop.registration->iconic;
     if (config_.covariance_calibrated && stop.registration->ran_iconic && !res.degenerate &&
         res.covariance.allFinite()) {
@@ -169,6 +190,11 @@ const StopEstimate& Localiser::step(const RangeImage& measured, const SensorMode
   } else if (config_.registration.odometry) {
     // The dead-reckoned pose and the prior's σ since the last fix.
     covariance = priorNuCovariance(config_.registration.odometry->at(stop.since_fix_m), stop.predicted_WS);
+  }
+  // The drift the rover believes it has at its last fix, under whatever this stop adds.
+  if (config_.drift) {
+    const Matrix6d drift = driftNuCovariance(*config_.drift, stop.fix_distance_m, stop.estimated_WS);
+    covariance = covariance ? Matrix6d(*covariance + drift) : drift;
   }
   // A rejected (or absent) registration keeps the dead-reckoned pose as it is.
   stop.estimated_WB = stop.accepted ? bodyUnder(stop.estimated_WS, config_.mount) : stop.predicted_WB;

@@ -48,6 +48,10 @@ struct LocaliserConfig {
   // Whether an accepted registration's covariance is calibrated (only then is it propagated into
   // the merged view's σ; docs/composite.md).
   bool covariance_calibrated = false;
+  // The pose's own uncertainty in the composite's σ (as a part every view of a cell shares):
+  // absent, a view merges with its map's σ alone (and a rejected stop with odometry's σ since the
+  // last fix, as before).
+  std::optional<LocalisationDrift> drift;
 };
 
 // One stop as the rover has it.
@@ -59,6 +63,8 @@ struct StopEstimate {
   bool registered = false;  // a registration ran
   bool accepted = false;    // and the rover accepted it
   double since_fix_m = 0;   // odometry's distance since the last accepted registration (or the start)
+  double distance_m = 0;    // odometry's distance from the start
+  double fix_distance_m = 0;  // odometry's distance from the start to the last accepted registration
   std::optional<RegistrationResult> registration;
   double seconds_map = 0, seconds_register = 0, seconds_merge = 0;
 };
@@ -113,5 +119,10 @@ ElevationMap cropMap(const ElevationMap& map, const CorridorWindow& window);
 // axis and σ_r on each rotation axis of the sensor at believed_WS, independent: what a
 // dead-reckoned pose's prior adds (A⁻¹·diag·A⁻ᵀ with A = sensorPoseJacobian(0, believed_WS)).
 Matrix6d priorNuCovariance(const PriorSigma& prior, const Eigen::Isometry3d& believed_WS);
+
+// The covariance of ν for the drift `drift` says a sensor at T_WS has after `distance_m` metres:
+// the world's horizontal axes and its height, independent, and a turn about the world's vertical
+// through the sensor (A⁻¹·P_e·A⁻ᵀ as priorNuCovariance).
+Matrix6d driftNuCovariance(const LocalisationDrift& drift, double distance_m, const Eigen::Isometry3d& T_WS);
 
 }  // namespace ambler::perception

@@ -178,6 +178,7 @@ struct TraverseSpec {
   double footprint_radius_m = 1.0;  // the body's ground plane is fitted over this disk
   perception::Mount mount;
   TraverseOdometry odometry;
+  perception::LocalisationDrift drift;  // the rover's belief of its drift: the composite's σ
   TraverseRegister reg = TraverseRegister::Composite;
   MatchMethod method = MatchMethod::FeaturesLm;  // features+iconic_lm; any matching method
 };

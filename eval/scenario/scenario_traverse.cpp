@@ -137,11 +137,19 @@ void readOdometry(const Reader& reader, const YAML::Node& node, TraverseOdometry
   o.heading_bias_deg_per_m = f.number("heading_bias_deg_per_m", kAny, o.heading_bias_deg_per_m);
 }
 
+void readDrift(const Reader& reader, const YAML::Node& node, perception::LocalisationDrift& d) {
+  const Fields f(reader, node, "traverse.drift",
+                 {"translation_sigma_per_m", "vertical_sigma_per_m", "heading_sigma_deg_per_sqrt_m"});
+  d.translation_sigma_per_m = f.number("translation_sigma_per_m", kNonNegative, d.translation_sigma_per_m);
+  d.vertical_sigma_per_m = f.number("vertical_sigma_per_m", kNonNegative, d.vertical_sigma_per_m);
+  d.heading_sigma_deg_per_sqrt_m = f.number("heading_sigma_deg_per_sqrt_m", kNonNegative, d.heading_sigma_deg_per_sqrt_m);
+}
+
 }  // namespace
 
 TraverseSpec readTraverse(const Reader& reader, const YAML::Node& node, const terrains::TerrainSpec& terrain) {
   const Fields f(reader, node, "traverse",
-                 {"path", "stop_spacing_m", "footprint_radius_m", "mount", "odometry", "register", "method"});
+                 {"path", "stop_spacing_m", "footprint_radius_m", "mount", "odometry", "drift", "register", "method"});
   TraverseSpec t;
   const PathPoints path = readPath(reader, f.required("path"));
   t.waypoints_xy_m = path.points;
@@ -162,6 +170,7 @@ TraverseSpec readTraverse(const Reader& reader, const YAML::Node& node, const te
     if (fm.get("pitch_deg")) t.mount.pitch_rad = degToRad(fm.number("pitch_deg", {-90.0, 90.0, true, true}, 0.0));
   }
   if (const auto o = f.get("odometry")) readOdometry(reader, *o, t.odometry);
+  if (const auto d = f.get("drift")) readDrift(reader, *d, t.drift);
   const std::string reg = f.choice("register", {"composite", "previous", "none"}, traverseRegisterName(t.reg));
   t.reg = reg == "composite" ? TraverseRegister::Composite
                              : (reg == "previous" ? TraverseRegister::Previous : TraverseRegister::None);

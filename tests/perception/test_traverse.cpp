@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "perception/composite.hpp"
 #include "perception/odometry.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "perception/traverse.hpp"
@@ -200,6 +201,71 @@ TEST(Localiser, CropAndPriorCovariance) {
   Matrix6d expected = Matrix6d::Zero();
   expected.diagonal() << r * r, r * r, r * r, 0.04, 0.04, 0.04;
   EXPECT_LT((E - expected).norm(), 1e-9);
+}
+
+// The drift's σ on a sloped plane z = s·x, in closed form: a horizontal shift δ of the surface
+// changes its height at a fixed point by −s·δx, a turn δψ about the vertical through the sensor at
+// c moves a point p by δψ·(−(p_y − c_y), p_x − c_x), and the height error adds, so
+//   σ_z² = v² + s²·(h² + ψ²·(p_y − c_y)²),  h = a·d, v = b·d, ψ = c·√d.
+// registrationSigma of driftNuCovariance must give it cell by cell (to first order: the
+// covariance is linearised at ν = 0, exact here because it is evaluated there).
+TEST(Localiser, DriftCovarianceOnASlopeIsTheClosedForm) {
+  const double slope = 0.3, d = 37.0;
+  LocalisationDrift drift;
+  drift.translation_sigma_per_m = 0.004, drift.vertical_sigma_per_m = 0.001, drift.heading_sigma_deg_per_sqrt_m = 0.08;
+  const double h = 0.004 * d, v = 0.001 * d, psi = 0.08 * kDeg * std::sqrt(d);
+  const Eigen::Isometry3d T_WS = sensorPose({1.5, -2.0, 3.0}, {3 * kDeg, -30 * kDeg, 25 * kDeg});
+  ElevationMap m(MapGrid::covering(-6, 8, 0, 10, 0.5));
+  for (int r = 0; r < m.grid().rows; ++r)
+    for (int c = 0; c < m.grid().cols; ++c) m.setKnown(r, c, float(slope * m.grid().center(r, c).x()), 0.01f);
+  const Raster<float> sigma = registrationSigma(m, PoseVector::Zero(), driftNuCovariance(drift, d, T_WS));
+  int checked = 0;
+  for (int r = 2; r < m.grid().rows - 2; ++r)  // the normals need two neighbours each side
+    for (int c = 2; c < m.grid().cols - 2; ++c) {
+      const Eigen::Vector2d p = m.grid().center(r, c);
+      const double dy = p.y() - T_WS.translation().y();
+      const double expected = std::sqrt(v * v + slope * slope * (h * h + psi * psi * dy * dy));
+      // float elevations (relative 6e-8) in the normals' differences: 1e-5 relative is ample.
+      ASSERT_NEAR(sigma(r, c), expected, 1e-5 * expected) << r << " " << c;
+      ++checked;
+    }
+  EXPECT_EQ(checked, (m.grid().rows - 4) * (m.grid().cols - 4));
+  // No distance, no drift.
+  const Matrix6d zero = driftNuCovariance(drift, 0.0, T_WS);
+  EXPECT_EQ(zero.norm(), 0.0);
+}
+
+// The composite's σ carries the drift the rover believes it has at its last fix: on a level plane
+// only the vertical drift moves the surface, so a cell last merged from stop k alone (seen by no
+// other) has σ² = σ_map² + (b·d_k)² with σ_map the same view's σ without drift.
+TEST(Localiser, TheCompositesSigmaCarriesTheDriftOfTheLastFix) {
+  int calls = 0;
+  LocaliserConfig with = planeConfig(TraverseReference::Composite);
+  with.drift = LocalisationDrift{0.0, 0.01, 0.0};
+  Localiser drifting(with, fixedRegistrar(true, 0, &calls));
+  Localiser plain(planeConfig(TraverseReference::Composite), fixedRegistrar(true, 0, &calls));
+  Localiser three(with, fixedRegistrar(true, 0, &calls));
+  walk(drifting, 4);
+  walk(plain, 4);
+  walk(three, 3);
+  for (int k = 1; k < 4; ++k) EXPECT_DOUBLE_EQ(drifting.stops()[std::size_t(k)].fix_distance_m, double(k));
+  // The cells only the last stop (d = 3 m) maps: known after four stops, not after three.
+  const ElevationMap& a = drifting.composite();
+  const ElevationMap& b = plain.composite();
+  const double vd = 0.01 * 3.0;
+  int checked = 0;
+  for (int r = 0; r < a.grid().rows; ++r)
+    for (int c = 0; c < a.grid().cols; ++c) {
+      if (a.stateAt(r, c) != CellState::Known || three.composite().stateAt(r, c) == CellState::Known) continue;
+      ASSERT_EQ(b.stateAt(r, c), CellState::Known);
+      const double s0 = b.sigma()(r, c);
+      // float σ (relative 6e-8), the plane's slopes of 0.02 and 0.01 in its normals (a vertical
+      // shift moves a sloped surface's height by the same δz: no other term).
+      EXPECT_NEAR(a.sigma()(r, c), std::sqrt(s0 * s0 + vd * vd), 1e-6) << r << " " << c;
+      EXPECT_EQ(a.elevation()(r, c), b.elevation()(r, c));
+      ++checked;
+    }
+  EXPECT_GT(checked, 100);
 }
 
 }  // namespace

@@ -136,6 +136,7 @@ perception::LocaliserConfig localiserConfig(const Scenario& sc, const std::vecto
   if (!paper) throw std::logic_error("traverse stage: a peer method (the reader refuses it)");
   config.weighted_maps = perception::readsWeightedMaps(*paper);
   config.covariance_calibrated = covarianceCalibrated(spec.method, sc.sensor);
+  if (spec.reg != TraverseRegister::None) config.drift = spec.drift;
   return config;
 }
 

@@ -50,6 +50,9 @@ void expectSameTraverse(const TraverseSpec& a, const TraverseSpec& b) {
   EXPECT_EQ(bits(a.odometry.heading_sigma_deg_per_m), bits(b.odometry.heading_sigma_deg_per_m));
   EXPECT_EQ(bits(a.odometry.translation_bias), bits(b.odometry.translation_bias));
   EXPECT_EQ(bits(a.odometry.heading_bias_deg_per_m), bits(b.odometry.heading_bias_deg_per_m));
+  EXPECT_EQ(bits(a.drift.translation_sigma_per_m), bits(b.drift.translation_sigma_per_m));
+  EXPECT_EQ(bits(a.drift.vertical_sigma_per_m), bits(b.drift.vertical_sigma_per_m));
+  EXPECT_EQ(bits(a.drift.heading_sigma_deg_per_sqrt_m), bits(b.drift.heading_sigma_deg_per_sqrt_m));
   EXPECT_EQ(a.reg, b.reg);
   EXPECT_EQ(a.method, b.method);
 }
@@ -70,6 +73,7 @@ TEST(ScenarioTraverse, EveryKeyIsRead) {
       withTraverse("{path: {waypoints_xy_m: [[-20, -5], [0, 0], [20, 5.5]]}, stop_spacing_m: 0.5, footprint_radius_m: 0.8, "
                    "mount: {height_m: 2.5, pitch_deg: -35}, odometry: {translation_sigma_per_m: 0.03, "
                    "heading_sigma_deg_per_m: 0.25, translation_bias: -0.05, heading_bias_deg_per_m: 0.1}, "
+                   "drift: {translation_sigma_per_m: 0.004, vertical_sigma_per_m: 0.0007, heading_sigma_deg_per_sqrt_m: 0.09}, "
                    "register: previous, method: features+iconic_robust}"),
       kFile);
   ASSERT_TRUE(s.traverse.has_value());
@@ -87,6 +91,9 @@ TEST(ScenarioTraverse, EveryKeyIsRead) {
   EXPECT_EQ(t.odometry.heading_sigma_deg_per_m, 0.25);  // degrees in both
   EXPECT_EQ(t.odometry.translation_bias, -0.05);
   EXPECT_EQ(t.odometry.heading_bias_deg_per_m, 0.1);
+  EXPECT_EQ(t.drift.translation_sigma_per_m, 0.004);
+  EXPECT_EQ(t.drift.vertical_sigma_per_m, 0.0007);
+  EXPECT_EQ(t.drift.heading_sigma_deg_per_sqrt_m, 0.09);
   EXPECT_EQ(t.reg, TraverseRegister::Previous);
   EXPECT_EQ(t.method, MatchMethod::FeaturesIconicRobust);
   expectRoundTrip(s);
@@ -153,6 +160,8 @@ TEST(ScenarioTraverse, DefaultsAreTheStructs) {
                            "  footprint_radius_m: 1\n", "  mount: {height_m: 3, pitch_deg: -30}\n",
                            "  odometry: {translation_sigma_per_m: 0.02, heading_sigma_deg_per_m: 0.5, translation_bias: 0, "
                            "heading_bias_deg_per_m: 0}\n",
+                           "  drift: {translation_sigma_per_m: 0.0033, vertical_sigma_per_m: 0.0003, "
+                           "heading_sigma_deg_per_sqrt_m: 0.067}\n",
                            "  register: composite\n", "  method: features+iconic_lm\n"})
     EXPECT_NE(y.find(line), std::string::npos) << line << "\n" << y;
   EXPECT_EQ(y.find("views:"), std::string::npos) << y;
@@ -162,7 +171,9 @@ TEST(ScenarioTraverse, DefaultsAreTheStructs) {
 TEST(ScenarioTraverse, RefusesUnknownKeysAndWrongTypes) {
   expectError(withPath(kLine, "stop_spacing: 2"), "traverse.stop_spacing", "unknown key (did you mean stop_spacing_m?)");
   expectError(withPath(kLine, "speed_m_s: 2"), "traverse.speed_m_s",
-              "unknown key (allowed: path, stop_spacing_m, footprint_radius_m, mount, odometry, register, method)");
+              "unknown key (allowed: path, stop_spacing_m, footprint_radius_m, mount, odometry, drift, register, method)");
+  expectError(withPath(kLine, "drift: {heading_sigma_deg_per_m: 0.1}"), "traverse.drift.heading_sigma_deg_per_m",
+              "unknown key (did you mean heading_sigma_deg_per_sqrt_m?)");
   expectError(withPath("{start_xy: [0, 0], heading_deg: 0, length_m: 5}"), "traverse.path.start_xy",
               "unknown key (did you mean start_xy_m?)");
   expectError(withPath(kLine, "mount: {pitch_rad: -0.5}"), "traverse.mount.pitch_rad", "unknown key (did you mean pitch_deg?)");
@@ -186,6 +197,8 @@ TEST(ScenarioTraverse, RefusesValuesOutOfRange) {
   expectError(withPath("{start_xy_m: [0, 0], heading_deg: 400, length_m: 5}"), "traverse.path.heading_deg",
               "expected a number in [-360, 360], got 400");
   expectError(withPath(kLine, "stop_spacing_m: 0"), "traverse.stop_spacing_m", "expected a number > 0, got 0");
+  expectError(withPath(kLine, "drift: {vertical_sigma_per_m: -0.001}"), "traverse.drift.vertical_sigma_per_m",
+              "expected a number >= 0, got -0.001");
   expectError(withPath(kLine, "footprint_radius_m: -1"), "traverse.footprint_radius_m", "expected a number > 0, got -1");
   expectError(withPath(kLine, "mount: {height_m: 0}"), "traverse.mount.height_m", "expected a number > 0, got 0");
   expectError(withPath(kLine, "mount: {pitch_deg: -90}"), "traverse.mount.pitch_deg",
