@@ -10,14 +10,24 @@ namespace ambler::eval {
 FootfallChoice scoreChoice(const std::string& method, const perception::FootfallScores& scores,
                            const perception::FootfallScores& truth, const perception::MapGrid& grid) {
   constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-  FootfallChoice choice{method, kNaN, kNaN, scores.best_score, kNaN, kNaN};
+  FootfallChoice choice{method, kNaN, kNaN, scores.best_score, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
+  // The truth's best: its lowest score, the first in row-major order on ties (as
+  // FootfallScores::best).
+  const auto& ts = truth.score;
+  for (int r = 0; r < ts.rows(); ++r)
+    for (int c = 0; c < ts.cols(); ++c)
+      if (std::isfinite(ts(r, c)) && !(ts(r, c) >= choice.truth_best_score)) {
+        choice.truth_best_score = ts(r, c);
+        const Eigen::Vector2d xy = grid.center(r, c);
+        choice.truth_best_x_m = xy.x(), choice.truth_best_y_m = xy.y();
+      }
   if (!scores.best) return choice;
   const int r = scores.best->x(), c = scores.best->y();
   const Eigen::Vector2d xy = grid.center(r, c);
   choice.x_m = xy.x(), choice.y_m = xy.y();
   choice.truth_score = truth.score(r, c);
+  choice.regret = choice.truth_score - choice.truth_best_score;
   long better = 0, all = 0;
-  const auto& ts = truth.score;
   for (int i = 0; i < ts.size(); ++i)
     if (std::isfinite(ts.data()[i])) ++all, better += !std::isfinite(choice.truth_score) || ts.data()[i] < choice.truth_score;
   choice.truth_percentile = all ? double(better) / double(all) : kNaN;
@@ -32,6 +42,9 @@ nlohmann::ordered_json toJson(const FootfallChoice& c) {
   j["score"] = jsonNumber(c.score);
   j["truth_score"] = jsonNumber(c.truth_score);
   j["truth_percentile"] = jsonNumber(c.truth_percentile);
+  j["regret"] = jsonNumber(c.regret);
+  j["truth_best"] = {{"x_m", jsonNumber(c.truth_best_x_m)}, {"y_m", jsonNumber(c.truth_best_y_m)},
+                     {"score", jsonNumber(c.truth_best_score)}};
   return j;
 }
 

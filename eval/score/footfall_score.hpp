@@ -1,8 +1,10 @@
 #pragma once
 // A footfall method's choice scored against the truth (docs/footfall.md): where it put the foot,
-// its own score there, the true surface's score there by the same method, and its true
-// percentile, the share of the true candidates the truth scores better (0: the truth's best; a
-// cell the truth rejects is worse than every true candidate: 1).
+// its own score there, the true surface's score there by the same method, its true percentile,
+// the share of the true candidates the truth scores better (0: the truth's best; a cell the truth
+// rejects is worse than every true candidate: 1), and its regret, the true score there minus the
+// truth's best score in the region (0: the truth's best; NaN where the truth rejects the choice),
+// with where that best is.
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -15,6 +17,9 @@ struct FootfallChoice {
   std::string method;
   double x_m, y_m;  // the chosen foot centre (NaN: no candidate)
   double score, truth_score, truth_percentile;
+  double regret;                              // truth_score − truth_best_score
+  double truth_best_x_m, truth_best_y_m;      // the truth's best candidate (NaN: none)
+  double truth_best_score;
 };
 
 // `scores` is the method's evaluation of the rover's map and `truth` the same method's of the
@@ -23,7 +28,7 @@ FootfallChoice scoreChoice(const std::string& method, const perception::Footfall
                            const perception::FootfallScores& truth, const perception::MapGrid& grid);
 
 // footfall/METHOD.json and metrics.footfall[k]: method, x_m, y_m, score, truth_score,
-// truth_percentile (NaN → null).
+// truth_percentile, regret, truth_best {x_m, y_m, score} (NaN → null).
 nlohmann::ordered_json toJson(const FootfallChoice& c);
 
 }  // namespace ambler::eval

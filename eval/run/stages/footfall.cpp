@@ -88,11 +88,13 @@ void run(RunState& s) {
     writeJson(s.out / "footfall" / (name + ".json"), j);
     writeGeoTiff(s.out / "footfall" / (name + "_score.tiff"), scores[m].score, grid, s.geo);
     s.metrics["footfall"].push_back(j);
-    char line[200];
-    std::snprintf(line, sizeof line, "footfall  %-21s (%.2f, %.2f) m on %s, score %.4g, true percentile %s", name.c_str(),
+    char line[240], regret[32] = "-";
+    if (std::isfinite(choice.regret)) std::snprintf(regret, sizeof regret, "%.3g", choice.regret);
+    std::snprintf(line, sizeof line, "footfall  %-21s (%.2f, %.2f) m on %s, score %.4g, true percentile %s, regret %s", name.c_str(),
                   choice.x_m, choice.y_m, map_name.c_str(), choice.score,
                   std::isfinite(choice.truth_percentile) ? (std::to_string(int(std::lround(100 * choice.truth_percentile))) + "%").c_str()
-                                                         : "-");
+                                                         : "-",
+                  regret);
     s.say(line);
   }
   writePng(s.out / "footfall" / "choices.png",

@@ -40,12 +40,25 @@ TEST(FootfallScore, TruePercentileIsTheShareOfTrueCandidatesScoredBetter) {
   EXPECT_DOUBLE_EQ(c.score, 1.0);
   EXPECT_DOUBLE_EQ(c.truth_score, 0.4f);
   EXPECT_DOUBLE_EQ(c.truth_percentile, 0.75);
-  // The truth's own best: 0.
-  EXPECT_DOUBLE_EQ(scoreChoice("m", scores({0, 9, 9, 9, 9}, 0), truth, grid()).truth_percentile, 0.0);
+  // The truth's best is column 0 (0.1 at x = 10.25 m): the regret is 0.4 − 0.1 in float.
+  EXPECT_DOUBLE_EQ(c.truth_best_x_m, 10.25);
+  EXPECT_DOUBLE_EQ(c.truth_best_y_m, 1.75);
+  EXPECT_DOUBLE_EQ(c.truth_best_score, 0.1f);
+  EXPECT_DOUBLE_EQ(c.regret, double(0.4f) - double(0.1f));
+  // The truth's own best: 0, and no regret.
+  const FootfallChoice best = scoreChoice("m", scores({0, 9, 9, 9, 9}, 0), truth, grid());
+  EXPECT_DOUBLE_EQ(best.truth_percentile, 0.0);
+  EXPECT_EQ(best.regret, 0.0);
+  // Ties: the first in row-major order is the truth's best.
+  const FootfallChoice tie = scoreChoice("m", scores({0, 9, 9, 9, 9}, 0), scores({0.5f, 0.2f, 0.9f, 0.2f, kNaNf}, std::nullopt), grid());
+  EXPECT_DOUBLE_EQ(tie.truth_best_x_m, 10.75);
+  EXPECT_DOUBLE_EQ(tie.regret, double(0.5f) - double(0.2f));
   // A cell the truth rejects is worse than every true candidate: 4/4.
   const FootfallChoice rejected = scoreChoice("m", scores({9, 9, 0, 9, 9}, 2), truth, grid());
   EXPECT_TRUE(std::isnan(rejected.truth_score));
   EXPECT_DOUBLE_EQ(rejected.truth_percentile, 1.0);
+  EXPECT_TRUE(std::isnan(rejected.regret));  // no true score to compare
+  EXPECT_DOUBLE_EQ(rejected.truth_best_score, 0.1f);
 }
 
 TEST(FootfallScore, NoCandidateIsAllNaNAndNullInJson) {
@@ -55,7 +68,9 @@ TEST(FootfallScore, NoCandidateIsAllNaNAndNullInJson) {
   const FootfallChoice c = scoreChoice("m", s, none, grid());
   EXPECT_TRUE(std::isnan(c.x_m) && std::isnan(c.y_m) && std::isnan(c.truth_percentile));
   const nlohmann::ordered_json j = toJson(c);
-  EXPECT_EQ(j.dump(), R"({"method":"m","x_m":null,"y_m":null,"score":null,"truth_score":null,"truth_percentile":null})");
+  EXPECT_TRUE(std::isnan(c.regret) && std::isnan(c.truth_best_x_m) && std::isnan(c.truth_best_score));
+  EXPECT_EQ(j.dump(), R"({"method":"m","x_m":null,"y_m":null,"score":null,"truth_score":null,"truth_percentile":null,)"
+                      R"("regret":null,"truth_best":{"x_m":null,"y_m":null,"score":null}})");
 }
 
 }  // namespace
