@@ -78,6 +78,27 @@ void run(RunState& s) {
   // The true surface scored by the same criteria: σ 0, every cell known.
   const std::vector<perception::FootfallScores> truths = perception::evaluateFootfalls(truth, region, config, spec.methods);
   std::filesystem::create_directories(s.out / "footfall");
+  // How well the map sees R (every cell of R, not only the candidate centres): what the
+  // uncertainty-aware method is for (docs/footfall.md, "In the run").
+  {
+    const perception::CellRegion all = perception::regionOfBox(grid, spec.x_m[0], spec.x_m[1], spec.y_m[0], spec.y_m[1]);
+    long known = 0, shadow = 0, cells = long(all.rows) * all.cols;
+    for (int r = all.row0; r < all.row0 + all.rows; ++r)
+      for (int c = all.col0; c < all.col0 + all.cols; ++c) {
+        known += map.stateAt(r, c) == perception::CellState::Known;
+        shadow += map.stateAt(r, c) == perception::CellState::Shadow;
+      }
+    const auto share = [&](long n) { return cells ? double(n) / double(cells) : std::numeric_limits<double>::quiet_NaN(); };
+    nlohmann::ordered_json& j = s.metrics["footfall_region"];
+    j["cells"] = cells;
+    j["known_fraction"] = jsonNumber(share(known));
+    j["shadow_fraction"] = jsonNumber(share(shadow));
+    j["unseen_fraction"] = jsonNumber(share(cells - known - shadow));
+    char line[160];
+    std::snprintf(line, sizeof line, "footfall  region R on %s: %ld cells, %.1f%% known, %.1f%% shadow, %.1f%% unseen",
+                  map_name.c_str(), cells, 100 * share(known), 100 * share(shadow), 100 * share(cells - known - shadow));
+    s.say(line);
+  }
   s.metrics["footfall"] = nlohmann::ordered_json::array();
   s.choices.clear();
   for (std::size_t m = 0; m < spec.methods.size(); ++m) {
