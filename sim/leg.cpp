@@ -1,14 +1,8 @@
 #include "sim/leg.hpp"
 
-#include <mujoco/mujoco.h>
-#include <unistd.h>
-
 #include <algorithm>
-#include <array>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 #include <memory>
 #include <numbers>
@@ -16,8 +10,6 @@
 #include <stdexcept>
 #include <vector>
 
-#include "base/atomic_file.hpp"
-#include "base/read_file.hpp"
 
 namespace ambler::sim {
 
@@ -30,7 +22,6 @@ constexpr double kDeg = 180.0 / std::numbers::pi;
 // never the soil model. timeconst 4 ms = 4 timesteps.
 constexpr const char* kSolref = "0.004 1";
 constexpr const char* kSolimp = "0.99 0.99 0.001";
-constexpr double kSandStep = 1e-4;  // m: the sand under the foot yields in steps this large
 
 std::string num(double v) {
   char buf[32];
@@ -48,6 +39,7 @@ void validate(const LegConfig& c) {
        "load_n must exceed the weight of leg and foot");
   need(c.bekker_n > 0 && c.bekker_kphi + c.bekker_kc > 0, "Bekker parameters must be positive");
   need(c.timestep_s > 0 && c.time_limit_s > 0 && c.load_ramp_s > 0, "times must be positive");
+  need(c.hold_s >= 0, "hold_s must not be negative");
   need(c.descent_speed_m_s > 0 && c.lateral_stiffness_n_per_m > 0, "servo gains must be positive");
 }
 
@@ -89,155 +81,6 @@ std::vector<std::string> footTiles(const LegConfig& c) {
       tiles.push_back(v.str());
     }
   return tiles;
-}
-
-struct ModelDeleter { void operator()(mjModel* m) const { mj_deleteModel(m); } };
-struct DataDeleter { void operator()(mjData* d) const { mj_deleteData(d); } };
-
-std::unique_ptr<mjModel, ModelDeleter> loadText(const std::string& xml,
-                                                const std::filesystem::path& dir) {
-  // MuJoCo 2.2.2 loads only from files; <include> resolves against the file's directory.
-  static std::atomic<int> counter{0};
-  const auto tmp = dir / ("leg_" + std::to_string(getpid()) + "_" +
-                          std::to_string(counter++) + ".xml");
-  std::ofstream(tmp) << xml;
-  std::array<char, 1000> err{};
-  mjModel* m = mj_loadXML(tmp.c_str(), nullptr, err.data(), int(err.size()));
-  std::filesystem::remove(tmp);
-  if (!m) throw std::runtime_error(dir.string() + ": MuJoCo could not load the leg world: " +
-                                   err.data());
-  return std::unique_ptr<mjModel, ModelDeleter>(m);
-}
-
-// The leg's handles into a loaded model.
-struct Rig {
-  int leg = -1, foot = -1, hfield_geom = -1;
-  int qx = -1, qy = -1, qz = -1, vz = -1;  // qpos / qvel addresses of the leg's slides
-  int act_x = -1, act_y = -1, act_z = -1;
-  std::vector<int> hfield_vertices;  // hfield data indices lowered so far (sand)
-};
-
-int require(int id, const char* what) {
-  if (id < 0) throw std::runtime_error(std::string("leg world: no ") + what);
-  return id;
-}
-
-Rig rig(const mjModel* m) {
-  Rig r;
-  r.leg = require(mj_name2id(m, mjOBJ_BODY, "leg"), "body leg");
-  r.foot = require(mj_name2id(m, mjOBJ_BODY, "foot"), "body foot");
-  r.hfield_geom = mj_name2id(m, mjOBJ_GEOM, "terrain");
-  if (r.hfield_geom < 0 || m->geom_type[r.hfield_geom] != mjGEOM_HFIELD)
-    for (int g = 0; g < m->ngeom && r.hfield_geom < 0; ++g)
-      if (m->geom_type[g] == mjGEOM_HFIELD) r.hfield_geom = g;
-  auto joint = [m](const char* name) { return require(mj_name2id(m, mjOBJ_JOINT, name), name); };
-  r.qx = m->jnt_qposadr[joint("leg_x")];
-  r.qy = m->jnt_qposadr[joint("leg_y")];
-  r.qz = m->jnt_qposadr[joint("leg_z")];
-  r.vz = m->jnt_dofadr[joint("leg_z")];
-  r.act_x = require(mj_name2id(m, mjOBJ_ACTUATOR, "leg_x"), "actuator leg_x");
-  r.act_y = require(mj_name2id(m, mjOBJ_ACTUATOR, "leg_y"), "actuator leg_y");
-  r.act_z = require(mj_name2id(m, mjOBJ_ACTUATOR, "leg_z"), "actuator leg_z");
-  return r;
-}
-
-struct FootPose {
-  Eigen::Vector3d sole;  // sole centre
-  Eigen::Vector3d axis;  // foot z axis
-};
-
-FootPose footPose(const mjModel* m, const mjData* d, int foot, double thickness) {
-  (void)m;
-  const double* p = d->xpos + 3 * foot;
-  const double* R = d->xmat + 9 * foot;
-  const Eigen::Vector3d axis(R[2], R[5], R[8]);
-  return {Eigen::Vector3d(p[0], p[1], p[2]) - thickness * axis, axis};
-}
-
-// Highest point of the world's own geoms (group 0: terrain and rocks, not the leg) on a grid of
-// vertical rays over the disk of radius r about (x, y); with `plane`, the deepest point above
-// the plane through `sole` with normal `axis` instead. nullopt if no ray hits.
-std::optional<double> probeFootprint(const mjModel* m, const mjData* d, double x, double y,
-                                     double r, double step, const FootPose* plane = nullptr) {
-  const mjtByte groups[mjNGROUP] = {1, 0, 0, 0, 0, 0};
-  const double top = m->stat.center[2] + 2 * m->stat.extent + 10.0;
-  const int n = int(std::ceil(r / step));
-  std::optional<double> best;
-  for (int i = -n; i <= n; ++i)
-    for (int j = -n; j <= n; ++j) {
-      const double dx = i * step, dy = j * step;
-      if (dx * dx + dy * dy > r * r) continue;
-      const mjtNum pnt[3] = {x + dx, y + dy, top}, dir[3] = {0, 0, -1};
-      int geom = -1;
-      const mjtNum t = mj_ray(m, d, pnt, dir, groups, 1, -1, &geom);
-      if (t < 0) continue;
-      double v = top - t;
-      if (plane) {
-        const auto& s = plane->sole;
-        const auto& a = plane->axis;
-        v -= s.z() - (a.x() * (pnt[0] - s.x()) + a.y() * (pnt[1] - s.y())) / a.z();
-      }
-      best = best ? std::max(*best, v) : v;
-    }
-  return best;
-}
-
-// Vertical force on the foot from its contacts (all, or only those with geom `only`), and the
-// most contacts of any one foot-geom/other-geom pair.
-struct ContactSum {
-  double fz = 0;
-  int max_pair = 0;
-  bool touching = false;
-};
-
-ContactSum footContacts(const mjModel* m, mjData* d, int foot, int only = -1) {
-  ContactSum s;
-  std::vector<std::pair<int, int>> pairs;
-  for (int i = 0; i < d->ncon; ++i) {
-    const mjContact& c = d->contact[i];
-    const bool foot1 = m->geom_bodyid[c.geom1] == foot, foot2 = m->geom_bodyid[c.geom2] == foot;
-    if (!foot1 && !foot2) continue;
-    s.touching = true;
-    pairs.emplace_back(c.geom1, c.geom2);
-    if (only >= 0 && c.geom1 != only && c.geom2 != only) continue;
-    mjtNum f[6];
-    mj_contactForce(m, d, i, f);
-    // f is in the contact frame; its normal points from geom1 to geom2, the force on geom2.
-    double fz = f[0] * c.frame[2] + f[1] * c.frame[5] + f[2] * c.frame[8];
-    s.fz += foot2 ? fz : -fz;
-  }
-  std::sort(pairs.begin(), pairs.end());
-  for (std::size_t i = 0; i < pairs.size();) {
-    std::size_t j = i;
-    while (j < pairs.size() && pairs[j] == pairs[i]) ++j;
-    s.max_pair = std::max(s.max_pair, int(j - i));
-    i = j;
-  }
-  return s;
-}
-
-// Sand: lowers every heightfield vertex whose triangles can reach under the foot (within
-// radius + one cell diagonal of the sole centre) to `sink` below its original height.
-void lowerSand(mjModel* m, const mjData* d, int geom, const std::vector<float>& original,
-               double cx, double cy, double reach, double sink) {
-  const int h = m->geom_dataid[geom];
-  const int nrow = m->hfield_nrow[h], ncol = m->hfield_ncol[h];
-  const double* size = m->hfield_size + 4 * h;
-  const double* g = d->geom_xpos + 3 * geom;
-  const double dx = 2 * size[0] / (ncol - 1), dy = 2 * size[1] / (nrow - 1);
-  const double lower = sink / size[2];  // in normalised units
-  float* data = m->hfield_data + m->hfield_adr[h];
-  const int c0 = std::max(0, int(std::floor((cx - reach - g[0] + size[0]) / dx)));
-  const int c1 = std::min(ncol - 1, int(std::ceil((cx + reach - g[0] + size[0]) / dx)));
-  const int r0 = std::max(0, int(std::floor((cy - reach - g[1] + size[1]) / dy)));
-  const int r1 = std::min(nrow - 1, int(std::ceil((cy + reach - g[1] + size[1]) / dy)));
-  for (int r = r0; r <= r1; ++r)
-    for (int c = c0; c <= c1; ++c) {
-      const double x = g[0] - size[0] + c * dx, y = g[1] - size[1] + r * dy;
-      if (std::hypot(x - cx, y - cy) > reach) continue;
-      const std::size_t i = std::size_t(r) * ncol + c;
-      data[i] = std::min(data[i], float(original[i] - lower));
-    }
 }
 
 }  // namespace
@@ -301,163 +144,8 @@ std::string legXml(const std::string& world_file, const std::string& world_xml_t
   return x.str();
 }
 
-namespace {
-
-// The world's MJCF text; a file that cannot be read is named in the one line.
-std::string worldText(const std::filesystem::path& world_xml) {
-  try {
-    return base::readFile(world_xml);
-  } catch (const base::ReadError& e) {
-    throw std::runtime_error(world_xml.string() + ": " + e.what());
-  }
-}
-
-}  // namespace
-
-std::filesystem::path writeLegWorld(const std::filesystem::path& world_xml, const LegConfig& c) {
-  const std::string text = worldText(world_xml);
-  const auto out = world_xml.parent_path() / "leg.xml";
-  base::writeFileAtomic(out, legXml(world_xml.filename().string(), text, c));
-  return out;
-}
-
 LegOutcome stepLeg(const std::filesystem::path& world_xml, double x, double y, const LegConfig& c) {
-  validate(c);
-  auto model = loadText(legXml(world_xml.filename().string(), worldText(world_xml), c), world_xml.parent_path());
-  mjModel* m = model.get();
-  std::unique_ptr<mjData, DataDeleter> data(mj_makeData(m));
-  mjData* d = data.get();
-  Rig g = rig(m);
-  if (c.soil == Soil::Sand && g.hfield_geom < 0)
-    throw std::runtime_error(world_xml.string() + ": sand needs a heightfield geom");
-  mj_forward(m, d);
-
-  const double radius = 0.5 * c.foot_diameter_m, t = c.foot_thickness_m;
-  double probe_step = 0.01;
-  if (g.hfield_geom >= 0) {
-    const int h = m->geom_dataid[g.hfield_geom];
-    probe_step = std::min(probe_step, m->hfield_size[4 * h] / (m->hfield_ncol[h] - 1));
-  }
-  const auto top = probeFootprint(m, d, x, y, radius, probe_step);
-  if (!top) throw std::runtime_error(world_xml.string() + ": no terrain under the foot at (" +
-                                     num(x) + ", " + num(y) + ")");
-
-  const double weight = (c.leg_mass_kg + c.foot_mass_kg) * kGravity;
-  const double z0 = *top + c.clearance_m + t;  // ankle height at the start
-  d->qpos[g.qx] = x;
-  d->qpos[g.qy] = y;
-  d->qpos[g.qz] = z0;
-  d->ctrl[g.act_x] = x;
-  d->ctrl[g.act_y] = y;
-  mj_forward(m, d);
-
-  // Sand: the original heightfield, to lower from and to restore for the sinkage probe.
-  std::vector<float> original;
-  int hid = -1;
-  double cell = 0;
-  if (g.hfield_geom >= 0) {
-    hid = m->geom_dataid[g.hfield_geom];
-    const float* p = m->hfield_data + m->hfield_adr[hid];
-    original.assign(p, p + std::size_t(m->hfield_nrow[hid]) * m->hfield_ncol[hid]);
-    cell = std::max(2 * m->hfield_size[4 * hid] / (m->hfield_ncol[hid] - 1),
-                    2 * m->hfield_size[4 * hid + 1] / (m->hfield_nrow[hid] - 1));
-  }
-  const double reach = radius + std::sqrt(2.0) * cell;
-  double soil_force = 0, sink_applied = 0;
-  const double filter_tau = 0.02, sink_rate = 0.25;  // s, m/s: sand yields no faster
-
-  // Vertical servo: a position command descending at descent_speed, tracked by a PD loop with
-  // gravity compensation, whose push is capped at the load allowed so far (0 before contact, a
-  // ramp to load_n after it): the leg lowers until the foot carries the allowed load.
-  const double kp = 2e4, kd = 2 * std::sqrt(kp * (c.leg_mass_kg + c.foot_mass_kg));
-  double z_cmd = z0;
-  double t_contact = -1, settle_since = -1;
-  Eigen::Vector2d first_contact = Eigen::Vector2d::Zero();
-  LegOutcome out;
-  auto pose = [&] { return footPose(m, d, g.foot, t); };
-
-  auto measure = [&] {
-    const FootPose p = pose();
-    out.x_m = p.sole.x();
-    out.y_m = p.sole.y();
-    out.z_m = p.sole.z();
-    out.tilt_deg = std::acos(std::clamp(p.axis.z(), -1.0, 1.0)) * kDeg;
-    out.slip_m = t_contact >= 0 ? (p.sole.head<2>() - first_contact).norm() : 0.0;
-    out.load_n = footContacts(m, d, g.foot).fz;
-    out.time_s = d->time;
-    // Sinkage against the true terrain: probe with the heightfield as the world gave it.
-    std::vector<float> modified;
-    if (hid >= 0) {
-      float* p0 = m->hfield_data + m->hfield_adr[hid];
-      modified.assign(p0, p0 + original.size());
-      std::copy(original.begin(), original.end(), p0);
-    }
-    out.sink_m = probeFootprint(m, d, p.sole.x(), p.sole.y(), radius, probe_step, &p).value_or(0.0);
-    if (hid >= 0) std::copy(modified.begin(), modified.end(), m->hfield_data + m->hfield_adr[hid]);
-  };
-
-  const double dt = m->opt.timestep;
-  double hold_until = -1;
-  Eigen::Vector3d settled_at = Eigen::Vector3d::Zero();
-  while (d->time < c.time_limit_s + c.hold_s) {
-    const double vz = d->qvel[g.vz];
-    const double allowed = t_contact < 0 ? 0.0 : c.load_n * std::min(1.0, (d->time - t_contact) / c.load_ramp_s);
-    // After contact the command runs ahead by 2× load/kp, so the cap, not the PD, sets the load.
-    z_cmd = t_contact < 0 ? z_cmd - c.descent_speed_m_s * dt : d->qpos[g.qz] - 2 * c.load_n / kp;
-    const double u = weight + kp * (z_cmd - d->qpos[g.qz]) + kd * (-c.descent_speed_m_s - vz);
-    // Before contact the servo may push with the foot's weight only (free descent).
-    d->ctrl[g.act_z] = std::clamp(u, t_contact < 0 ? 0.0 : weight - allowed, weight + c.load_n);
-    mj_step(m, d);
-
-    const ContactSum contacts = footContacts(m, d, g.foot);
-    out.max_pair_contacts = std::max(out.max_pair_contacts, contacts.max_pair);
-    out.max_contacts = std::max(out.max_contacts, d->ncon);
-    out.max_rows = std::max(out.max_rows, d->nefc);
-    if (contacts.max_pair >= mjMAXCONPAIR || d->warning[mjWARN_CONTACTFULL].number > 0 ||
-        d->warning[mjWARN_CNSTRFULL].number > 0)
-      out.contact_cap_reached = true;
-    if (contacts.touching && t_contact < 0) {
-      t_contact = d->time;
-      first_contact = pose().sole.head<2>();
-    }
-
-    if (c.soil == Soil::Sand && t_contact >= 0) {
-      const double fz = footContacts(m, d, g.foot, g.hfield_geom).fz;
-      // Quasi-static Bekker: the soil sees the contact force, but never more than the load the
-      // leg commands, so impacts of the foot following the yielding sand do not dig it deeper.
-      soil_force += (std::clamp(fz, 0.0, allowed) - soil_force) * dt / filter_tau;
-      const double target = bekkerSinkage(soil_force, c);
-      // Yield in steps of at least 0.1 mm: each step drops the foot a little, and a creep of
-      // ever smaller steps as the force converges would keep it from ever settling.
-      if (target > sink_applied + kSandStep) {
-        sink_applied = std::min(target, sink_applied + sink_rate * dt);
-        const FootPose p = pose();
-        lowerSand(m, d, g.hfield_geom, original, p.sole.x(), p.sole.y(), reach, sink_applied);
-        mj_forward(m, d);
-      }
-    }
-
-    if (hold_until >= 0) {
-      out.drift_m = std::max(out.drift_m, (pose().sole - settled_at).norm());
-      if (d->time >= hold_until) break;
-      continue;
-    }
-    mjtNum vel[6];
-    mj_objectVelocity(m, d, mjOBJ_BODY, g.foot, vel, 0);
-    const bool slow = Eigen::Vector3d(vel[3], vel[4], vel[5]).norm() < c.settle_speed_m_s &&
-                      Eigen::Vector3d(vel[0], vel[1], vel[2]).norm() < c.settle_angular_speed_rad_s;
-    const bool loaded = t_contact >= 0 && d->time >= t_contact + c.load_ramp_s;
-    settle_since = (slow && loaded) ? (settle_since < 0 ? d->time : settle_since) : -1;
-    const bool settled = settle_since >= 0 && d->time - settle_since >= c.settle_window_s;
-    if (settled || d->time >= c.time_limit_s) {
-      out.settled = settled;
-      measure();
-      settled_at = pose().sole;
-      hold_until = d->time + c.hold_s;
-      if (!settled) break;
-    }
-  }
-  return out;
+  return Leg(world_xml, c).step(x, y);
 }
 
 namespace {

@@ -4,8 +4,10 @@
 // ankle. The leg lowers the foot until it carries the load, waits until it settles and reports
 // the foot's tilt, sinkage and slip. Sand sinks by the Bekker pressure–sinkage law (the
 // heightfield under the foot is lowered at run time), not by contact softness. See docs/leg.md.
+// sim::Leg builds the leg's MuJoCo model once for many steps; stepLeg builds it for one.
 #include <Eigen/Core>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -35,7 +37,7 @@ struct LegConfig {
   double settle_speed_m_s = 2e-3;             // settled: foot speeds below these ...
   double settle_angular_speed_rad_s = 0.02;
   double settle_window_s = 0.05;              // ... for this long, after the ramp
-  double hold_s = 0.2;                        // after settling, watch the foot this long
+  double hold_s = 0.2;  // after settling, watch the foot this long (drift_m); 0: stop when settled
   double time_limit_s = 3.0;                  // settled = false if not settled by then
   double timestep_s = 1e-3;
 };
@@ -45,7 +47,9 @@ struct LegOutcome {
   double tilt_deg = 0;                // foot axis from vertical
   double sink_m = 0;     // deepest point of the true terrain above the sole plane, in the footprint
   double slip_m = 0;     // horizontal travel of the sole centre from first contact to settled
-  double drift_m = 0;    // largest excursion of the sole centre during the hold after settling
+  // Largest excursion of the sole centre during the hold after settling; NaN when there was no
+  // hold (hold_s = 0, or not settled).
+  double drift_m = 0;
   double load_n = 0;     // vertical contact force on the foot when settled
   double time_s = 0;     // simulated time at settling
   int max_pair_contacts = 0;  // most contacts seen between one foot geom and one other geom
@@ -73,6 +77,45 @@ std::filesystem::path writeLegWorld(const std::filesystem::path& world_xml, cons
 // no terrain lies under (x, y).
 LegOutcome stepLeg(const std::filesystem::path& world_xml, double x, double y,
                    const LegConfig& config);
+
+// The footfall centres a Leg may step on: a box in the world's x and y, metres.
+struct LegRegion {
+  double x_min = 0, x_max = 0, y_min = 0, y_max = 0;
+};
+
+// The leg built once for many steps on one world (docs/leg.md, "One leg per run"): the world and
+// the leg compiled into one MuJoCo model at construction; each step() resets the state and the
+// heightfield and runs what stepLeg runs, so steps are independent of each other and of order.
+class Leg {
+ public:
+  // The whole world: stepLeg's model. Throws as stepLeg does.
+  Leg(const std::filesystem::path& world_xml, const LegConfig& config);
+  // The world cropped to what the foot can touch from centres in `region`: the world's static
+  // geoms whose bounding sphere reaches the region grown by twice the foot's radius and its
+  // thickness (heightfields and planes always, whole), each the world's to the bit, so that a
+  // step computes what stepLeg computes. A world with moving bodies, tendons, equality
+  // constraints, contact pairs, excludes or mocap bodies is kept whole. Throws as stepLeg does,
+  // and std::invalid_argument for an empty or non-finite region.
+  Leg(const std::filesystem::path& world_xml, const LegRegion& region, const LegConfig& config);
+  Leg(Leg&&) noexcept;
+  Leg& operator=(Leg&&) noexcept;
+  ~Leg();
+
+  // Steps on (x, y), as stepLeg(world_xml, x, y, config). A step whose sole centre leaves the
+  // region grown by the foot's radius is rerun on the whole world (stepLeg). Throws
+  // std::invalid_argument if (x, y) lies outside the region, std::runtime_error if no terrain
+  // lies under it.
+  LegOutcome step(double x, double y);
+
+  bool cropped() const;       // the terrain was cropped (false: the whole world)
+  int terrainGeoms() const;   // the world's geoms in the leg's model
+  int droppedGeoms() const;   // the world's geoms left out by the crop
+  int fallbacks() const;      // steps rerun on the whole world so far
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // The rest pose of a rigid disk lowered vertically onto a height grid, without dynamics: the
 // plane under the disk that puts its centre lowest with no terrain point above it (the disk

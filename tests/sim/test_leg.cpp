@@ -186,6 +186,55 @@ TEST(Leg, HalfOverALedgeTiltsAndDoesNotSlip) {
   EXPECT_GT(o.z_m, 0.09);  // still on the upper level
 }
 
+// Every field to the bit.
+void expectSame(const LegOutcome& a, const LegOutcome& b) {
+  EXPECT_EQ(a.x_m, b.x_m);
+  EXPECT_EQ(a.y_m, b.y_m);
+  EXPECT_EQ(a.z_m, b.z_m);
+  EXPECT_EQ(a.tilt_deg, b.tilt_deg);
+  EXPECT_EQ(a.sink_m, b.sink_m);
+  EXPECT_EQ(a.slip_m, b.slip_m);
+  EXPECT_EQ(a.drift_m, b.drift_m);
+  EXPECT_EQ(a.load_n, b.load_n);
+  EXPECT_EQ(a.time_s, b.time_s);
+  EXPECT_EQ(a.max_pair_contacts, b.max_pair_contacts);
+  EXPECT_EQ(a.max_contacts, b.max_contacts);
+  EXPECT_EQ(a.max_rows, b.max_rows);
+  EXPECT_EQ(a.settled, b.settled);
+  EXPECT_EQ(a.contact_cap_reached, b.contact_cap_reached);
+}
+
+// A Leg is built once and stepped many times: each step resets MuJoCo's state and puts the sand
+// back, so a step after others, on sand the earlier steps lowered, is the step stepLeg makes on a
+// model built for it, to the bit. So is a step of a Leg cropped to a region (the slab kept, its
+// mesh copied from the world's model), first and after others.
+TEST(Leg, StepsAreIndependentOfEachOther) {
+  LegWorld w(planeWithSlab(0.3, 0.3, 0.075, 0.10));
+  LegConfig c;
+  c.soil = Soil::Sand;
+  const LegOutcome fresh = stepLeg(w.xml, 0.5, 0.5, c);  // sand beside the slab
+  Leg whole(w.xml, c);
+  const LegOutcome first = whole.step(0.5, 0.5);
+  whole.step(0.1, 0.0);  // on the slab
+  whole.step(0.5, 0.6);  // sand, overlapping the first crater
+  const LegOutcome again = whole.step(0.5, 0.5);
+  print("sand, fresh model", fresh);
+  print("sand, fourth step", again);
+  expectSame(first, fresh);
+  expectSame(again, fresh);
+  EXPECT_FALSE(whole.cropped());
+
+  Leg cropped(w.xml, LegRegion{0.0, 0.6, 0.0, 0.6}, c);
+  EXPECT_TRUE(cropped.cropped());
+  expectSame(cropped.step(0.5, 0.5), fresh);
+  expectSame(cropped.step(0.1, 0.0), stepLeg(w.xml, 0.1, 0.0, c));
+  cropped.step(0.5, 0.6);
+  expectSame(cropped.step(0.5, 0.5), fresh);
+  EXPECT_EQ(cropped.fallbacks(), 0);
+  EXPECT_THROW(cropped.step(0.7, 0.5), std::invalid_argument);
+  EXPECT_THROW(Leg(w.xml, LegRegion{0.6, 0.0, 0.0, 0.6}, c), std::invalid_argument);
+}
+
 // leg.xml (the world plus the leg) is plain MJCF that MuJoCo loads, e.g. in `simulate`.
 TEST(Leg, WritesALegWorldThatLoads) {
   LegWorld w(planeWithSlab(0.3, 0.3, 0.075, 0.05));
