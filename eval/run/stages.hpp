@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "eval/run/run_state.hpp"
+#include "sim/leg.hpp"
 
 namespace ambler::eval {
 
@@ -29,5 +30,10 @@ Stage footfall();   // each method's footfall on a map, scored on the true surfa
 Stage leg();        // the MuJoCo leg steps on each choice; leg/, world/leg.xml
 Stage traverse();   // the rover walks the path: each stop scanned, registered, merged; traverse/
 }  // namespace stages
+
+// The leg stage's leg for a scenario with footfall and leg sections: the scenario's foot, load and
+// soil, no hold after settling; and the footfall region it steps in.
+sim::LegConfig legConfig(const Scenario& sc);
+sim::LegRegion legRegion(const Scenario& sc);
 
 }  // namespace ambler::eval

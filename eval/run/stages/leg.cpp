@@ -1,7 +1,7 @@
-// The leg stage (docs/scenario.md, "leg"; docs/leg.md): the simulated leg steps on each footfall
-// method's choice in the run's MuJoCo world (sim::stepLeg) and reports the foot's tilt, sink, slip
-// and whether it settled, beside the tilt and height a rigid disk would rest at on the true
-// surface (sim::restingDisk, no dynamics). world/leg.xml (the world with the leg, for MuJoCo's
+// The leg stage (docs/scenario.md, "leg"; docs/leg.md): the simulated leg, built once for the run on
+// the world cropped to the footfall region (sim::Leg), steps on each footfall method's choice and
+// reports the foot's tilt, sink, slip and whether it settled, beside the tilt and height a rigid
+// disk would rest at on the true surface (sim::restingDisk, no dynamics). world/leg.xml (the world with the leg, for MuJoCo's
 // simulate), leg/METHOD.json, leg/predicted_tilt.tiff (every candidate), metrics.footfall[k].leg.
 #include <cmath>
 #include <cstdio>
@@ -11,17 +11,29 @@
 #include "eval/run/stages.hpp"
 #include "sim/leg.hpp"
 
-namespace ambler::eval::stages {
+namespace ambler::eval {
+
+sim::LegConfig legConfig(const Scenario& sc) {
+  sim::LegConfig config;
+  config.foot_diameter_m = sc.footfall->foot_diameter_m;
+  config.load_n = sc.leg->load_n;
+  config.soil = sc.leg->soil == Soil::Sand ? sim::Soil::Sand : sim::Soil::Rock;
+  config.hold_s = 0;  // the drift over a hold is not reported: stop when settled
+  return config;
+}
+
+sim::LegRegion legRegion(const Scenario& sc) {
+  const FootfallSpec& ff = *sc.footfall;
+  return {ff.x_m[0], ff.x_m[1], ff.y_m[0], ff.y_m[1]};
+}
+
+namespace stages {
 
 namespace {
 
 void run(RunState& s) {
   const Scenario& sc = s.scenario;
-  const LegSpec& spec = *sc.leg;
-  sim::LegConfig config;
-  config.foot_diameter_m = sc.footfall->foot_diameter_m;
-  config.load_n = spec.load_n;
-  config.soil = spec.soil == Soil::Sand ? sim::Soil::Sand : sim::Soil::Rock;
+  const sim::LegConfig config = legConfig(sc);
   sim::writeLegWorld(s.world_xml, config);
   std::filesystem::create_directories(s.out / "leg");
   // The true surface on the footfall map's grid (the footfall stage's), rows flipped to
@@ -44,6 +56,10 @@ void run(RunState& s) {
       }
     writeGeoTiff(s.out / "leg" / "predicted_tilt.tiff", tilt, grid, s.geo);
   }
+  // Built once, on the world cropped to the footfall region, which holds every choice.
+  base::Stopwatch build;
+  sim::Leg leg(s.world_xml, legRegion(sc), config);
+  s.addTime("leg", build.seconds());
   for (std::size_t k = 0; k < s.choices.size(); ++k) {
     const FootfallChoice& c = s.choices[k];
     nlohmann::ordered_json j;
@@ -54,7 +70,7 @@ void run(RunState& s) {
       j["settled"] = false;
     } else {
       base::Stopwatch t;
-      const sim::LegOutcome o = sim::stepLeg(s.world_xml, c.x_m, c.y_m, config);
+      const sim::LegOutcome o = leg.step(c.x_m, c.y_m);
       s.addTime("leg", t.seconds());
       const auto rest = sim::restingDisk(heights, grid.cell, x0, y0, c.x_m, c.y_m, config.foot_diameter_m);
       j["tilt_deg"] = o.tilt_deg;
@@ -83,4 +99,5 @@ Stage leg() {
   return {"leg", [](const Scenario& sc) { return sc.leg.has_value(); }, run};
 }
 
-}  // namespace ambler::eval::stages
+}  // namespace stages
+}  // namespace ambler::eval

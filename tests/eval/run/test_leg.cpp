@@ -12,13 +12,16 @@
 #include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
+#include "eval/geo/dem.hpp"
 #include "eval/pictures/figures.hpp"
 #include "eval/scenario/io.hpp"
 #include "eval/run/runner.hpp"
+#include "eval/run/stages.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "perception/sensor_geometry.hpp"
 #include "eval/picture_checks.hpp"
 #include "sim/ground_truth.hpp"
+#include "sim/leg.hpp"
 #include "sim/ray_scene.hpp"
 #include "sim/world.hpp"
 #include "terrains/terrain.hpp"
@@ -79,6 +82,82 @@ leg: {soil: )") + soil + ", load_n: 3000}\n",
       EXPECT_TRUE(std::filesystem::exists(run.dir / "leg" / (f["method"].get<std::string>() + ".json")));
     }
   }
+}
+
+// The leg built once per run, as the leg stage builds it (sim::Leg on the world cropped to the footfall
+// region, no hold), against sim::stepLeg (the whole world, built for the step) on the world of the
+// sandbox experiment (scenarios/experiments/sandbox.yaml, seed 1): the footfalls its methods chose
+// on sand, one of them on rock soil, and a foot on the rock nearest the region's centre.
+//
+// What the leg stage needs is agreement within what the settle rule cannot tell apart: in one
+// window w = 50 ms at speeds under v = 2 mm/s and ω = 0.02 rad/s a foot turns ω·w = 1 mrad
+// (0.0573°), its sole centre (t = 5 cm below the ankle whose speed is measured) moves
+// (v + ω·t)·w = 0.10005 mm and its sole at the rim (√(r² + t²) = 0.158 m from the ankle)
+// (v + ω·0.158)·w = 0.10016 mm; on sand one more 0.1 mm yield step. The crop is built to be
+// tighter than that: the heightfield whole at its place, the kept rocks' compiled meshes and frames
+// copied from the world's model, the probe's rays cast from the same height, so every contact is
+// computed as in the whole world and in the same order. The test holds it to the bit; a difference
+// within the bounds above would still be a correct leg, but no longer this crop.
+TEST(Run, LegBuiltOnceMatchesStepLegOnTheSandbox) {
+  const Scenario sc = loadScenario(fs::path(AMBLER_SOURCE_DIR) / "scenarios" / "experiments" / "sandbox.yaml");
+  const terrains::Terrain terrain = scenarioTerrain(sc);
+  test::TempDir dir;
+  const fs::path world = sim::writeWorld(terrain, dir.path(), "sandbox");
+  const sim::LegConfig sand = legConfig(sc);
+  ASSERT_EQ(sand.soil, sim::Soil::Sand);
+  sim::LegConfig rock = sand;
+  rock.soil = sim::Soil::Rock;
+  const sim::LegRegion region = legRegion(sc);
+  // The rock nearest the region's centre, stepped on at the region's point nearest to it.
+  const Eigen::Vector2d centre(0.5 * (region.x_min + region.x_max), 0.5 * (region.y_min + region.y_max));
+  const auto nearest = std::min_element(terrain.rocks.begin(), terrain.rocks.end(), [&](const auto& a, const auto& b) {
+    return (a.center.template head<2>() - centre).norm() < (b.center.template head<2>() - centre).norm();
+  });
+  ASSERT_NE(nearest, terrain.rocks.end());
+  const Eigen::Vector2d on_rock(std::clamp(nearest->center.x(), region.x_min, region.x_max),
+                                std::clamp(nearest->center.y(), region.y_min, region.y_max));
+  struct Case {
+    const char* what;
+    Eigen::Vector2d at;
+    bool sand;
+  };
+  // The choices of `ambler run scenarios/experiments/sandbox.yaml` (cell centres of its 5 cm map).
+  const std::vector<Case> cases{{"max_min, free_volume, equilibrium", {0.275, 0.825}, true},
+                                {"planar_fit", {0.325, 0.625}, true},
+                                {"support_area", {-0.125, 0.825}, true},
+                                {"equilibrium_uncertain", {0.325, 0.775}, true},
+                                {"support_area on rock soil", {-0.125, 0.825}, false},
+                                {"the rock nearest the centre", on_rock, true}};
+  sim::Leg leg_sand(world, region, sand), leg_rock(world, region, rock);
+  EXPECT_TRUE(leg_sand.cropped());
+  EXPECT_GT(leg_sand.droppedGeoms(), 0);
+  std::vector<sim::LegOutcome> first;
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const sim::LegOutcome fast = (c.sand ? leg_sand : leg_rock).step(c.at.x(), c.at.y());
+    const sim::LegOutcome ref = sim::stepLeg(world, c.at.x(), c.at.y(), c.sand ? sand : rock);
+    std::printf("%-34s tilt %.4f deg (%+.2g), sink %.3f mm (%+.2g), slip %.3f mm (%+.2g), settled at %.3f s (%+.3f)\n",
+                c.what, fast.tilt_deg, fast.tilt_deg - ref.tilt_deg, 1e3 * fast.sink_m, 1e3 * (fast.sink_m - ref.sink_m),
+                1e3 * fast.slip_m, 1e3 * (fast.slip_m - ref.slip_m), fast.time_s, fast.time_s - ref.time_s);
+    EXPECT_TRUE(ref.settled);
+    EXPECT_EQ(fast.settled, ref.settled);
+    EXPECT_EQ(fast.contact_cap_reached, ref.contact_cap_reached);
+    EXPECT_EQ(fast.tilt_deg, ref.tilt_deg);
+    EXPECT_EQ(fast.sink_m, ref.sink_m);
+    EXPECT_EQ(fast.slip_m, ref.slip_m);
+    EXPECT_EQ(fast.time_s, ref.time_s);
+    EXPECT_TRUE(std::isnan(fast.drift_m));  // no hold
+    first.push_back(fast);
+  }
+  EXPECT_EQ(leg_sand.fallbacks(), 0);
+  // Steps are independent: the first again, after the others lowered the sand elsewhere, is the
+  // same to the bit.
+  const sim::LegOutcome again = leg_sand.step(cases[0].at.x(), cases[0].at.y());
+  EXPECT_EQ(again.tilt_deg, first[0].tilt_deg);
+  EXPECT_EQ(again.sink_m, first[0].sink_m);
+  EXPECT_EQ(again.slip_m, first[0].slip_m);
+  EXPECT_EQ(again.time_s, first[0].time_s);
+  EXPECT_THROW(leg_sand.step(region.x_max + 0.01, centre.y()), std::invalid_argument);
 }
 
 }  // namespace
