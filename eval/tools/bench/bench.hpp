@@ -41,4 +41,11 @@ nlohmann::ordered_json benchFootfall(const BenchOptions& options);
 // std::runtime_error when the scenario has no traverse. Prints a table.
 nlohmann::ordered_json benchTraverse(const Scenario& scenario, const BenchOptions& options);
 
+// The leg benchmark (docs/leg.md): the scenario's leg (its foot, load and soil, as the leg stage
+// builds it) on its world, stepping on 3 × 3 footfalls over the footfall region's candidate centres,
+// on one thread: the median time to build the leg once (sim::Leg), per step of that leg, of the
+// whole world's leg built once, and of sim::stepLeg (the model built for every step), with the
+// largest difference of the first's outcomes from stepLeg's. Throws std::runtime_error if the scenario has no footfall or leg section. Prints a table.
+nlohmann::ordered_json benchLeg(const Scenario& scenario, const BenchOptions& options);
+
 }  // namespace ambler::eval

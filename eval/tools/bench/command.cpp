@@ -1,4 +1,4 @@
-// `ambler bench scan|map|match|footfall|traverse` (docs/benchmarks.md): speed, as tables of medians.
+// `ambler bench scan|map|match|footfall|traverse|leg` (docs/benchmarks.md): speed, as tables of medians.
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <memory>
@@ -44,6 +44,11 @@ void addBenchCommands(CLI::App& app, Commands& out) {
   CLI::App* trav = add("traverse", "A traverse run whole: seconds per run and per stop of the rover's loop, peak memory.",
                        [traverse](const BenchOptions& opt) { benchTraverse(loadScenario(*traverse), opt); });
   trav->add_option("--scenario", *traverse, "A scenario with a traverse section")->capture_default_str();
+  auto leg_scenario = std::make_shared<std::string>("scenarios/experiments/sandbox.yaml");
+  CLI::App* leg = add("leg", "The leg built once vs per step: ms to build, ms per step (1 thread), on a scenario's "
+                             "footfall region.",
+                      [leg_scenario](const BenchOptions& opt) { benchLeg(loadScenario(*leg_scenario), opt); });
+  leg->add_option("--scenario", *leg_scenario, "A scenario with footfall and leg sections")->capture_default_str();
   add("footfall", "Footfall evaluation, all methods dense over 10 000 candidates at 10 and 2 cm (1 thread and all cores).",
       benchFootfall);
 }
