@@ -34,6 +34,27 @@ FootfallChoice scoreChoice(const std::string& method, const perception::Footfall
   return choice;
 }
 
+MissCause missCause(double tilt_deg, double slip_m, bool settled, double predicted_tilt_deg,
+                    double truth_best_predicted_deg, double region_min_predicted_deg) {
+  constexpr double kTiltDeg = 5.0, kSlipM = 0.01;
+  if (settled && tilt_deg <= kTiltDeg && slip_m <= kSlipM) return MissCause::None;
+  if (!(region_min_predicted_deg <= kTiltDeg)) return MissCause::Ground;
+  if (predicted_tilt_deg <= kTiltDeg) return MissCause::Leg;
+  if (truth_best_predicted_deg <= kTiltDeg) return MissCause::Map;
+  return MissCause::Method;
+}
+
+const char* missCauseName(MissCause c) {
+  switch (c) {
+    case MissCause::None: return "none";
+    case MissCause::Ground: return "ground";
+    case MissCause::Leg: return "leg";
+    case MissCause::Map: return "map";
+    case MissCause::Method: return "method";
+  }
+  return "?";
+}
+
 nlohmann::ordered_json toJson(const FootfallChoice& c) {
   nlohmann::ordered_json j;
   j["method"] = c.method;

@@ -27,6 +27,17 @@ struct FootfallChoice {
 FootfallChoice scoreChoice(const std::string& method, const perception::FootfallScores& scores,
                            const perception::FootfallScores& truth, const perception::MapGrid& grid);
 
+// Where a step's miss comes from (docs/experiments/footfall.md, "Where the misses come from"), from
+// the leg's outcome and rigid-disk rest tilts on the true surface (sim::restingDisk): None, the
+// step held (settled, tilt ≤ 5°, slip ≤ 1 cm); Ground, no candidate of R rests a rigid disk within
+// 5° (region_min); Leg, the rigid disk rests within 5° at the chosen spot but the leg did not hold;
+// Map, the chosen spot tilts the disk beyond 5° and the method's choice on the true surface
+// (truth_best) would not; Method, both would. A NaN tilt is not within 5°.
+enum class MissCause { None, Ground, Leg, Map, Method };
+MissCause missCause(double tilt_deg, double slip_m, bool settled, double predicted_tilt_deg,
+                    double truth_best_predicted_deg, double region_min_predicted_deg);
+const char* missCauseName(MissCause c);
+
 // footfall/METHOD.json and metrics.footfall[k]: method, x_m, y_m, score, truth_score,
 // truth_percentile, regret, truth_best {x_m, y_m, score} (NaN → null).
 nlohmann::ordered_json toJson(const FootfallChoice& c);

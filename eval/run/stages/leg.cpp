@@ -1,11 +1,16 @@
 // The leg stage (docs/scenario.md, "leg"; docs/leg.md): the simulated leg, built once for the run on
 // the world cropped to the footfall region (sim::Leg), steps on each footfall method's choice and
 // reports the foot's tilt, sink, slip and whether it settled, beside the tilt and height a rigid
-// disk would rest at on the true surface (sim::restingDisk, no dynamics). world/leg.xml (the world with the leg, for MuJoCo's
-// simulate), leg/METHOD.json, leg/predicted_tilt.tiff (every candidate), metrics.footfall[k].leg.
+// disk would rest at on the true surface (sim::restingDisk, no dynamics), and the same for the
+// candidate the method would choose on the true surface (its truth_best: what a perfect map would
+// have given). world/leg.xml (the world with the leg, for MuJoCo's simulate), leg/METHOD.json,
+// leg/predicted_tilt.tiff (every candidate), metrics.footfall[k].leg and .truth_best.leg,
+// metrics.footfall_region's rigid-disk figures.
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
+#include <utility>
 
 #include "eval/scenario/io.hpp"
 #include "eval/run/stages.hpp"
@@ -55,41 +60,86 @@ void run(RunState& s) {
           tilt(r, c) = float(rest->tilt_deg);
       }
     writeGeoTiff(s.out / "leg" / "predicted_tilt.tiff", tilt, grid, s.geo);
+    // Could any candidate of R hold? The smallest rest tilt and the share of candidates within the
+    // goal's 5° (docs/experiments/footfall.md, "Where the misses come from").
+    double lowest = std::numeric_limits<double>::quiet_NaN();
+    long within = 0, candidates = long(region.rows) * region.cols;
+    for (int r = region.row0; r < region.row0 + region.rows; ++r)
+      for (int c = region.col0; c < region.col0 + region.cols; ++c)
+        if (std::isfinite(tilt(r, c))) {
+          if (!(tilt(r, c) >= lowest)) lowest = tilt(r, c);
+          within += tilt(r, c) <= 5.0f;
+        }
+    s.metrics["footfall_region"]["min_predicted_tilt_deg"] = jsonNumber(lowest);
+    s.metrics["footfall_region"]["predicted_within_5deg_fraction"] =
+        jsonNumber(candidates ? double(within) / double(candidates) : std::numeric_limits<double>::quiet_NaN());
   }
   // Built once, on the world cropped to the footfall region, which holds every choice.
   base::Stopwatch build;
   sim::Leg leg(s.world_xml, legRegion(sc), config);
   s.addTime("leg", build.seconds());
-  for (std::size_t k = 0; k < s.choices.size(); ++k) {
-    const FootfallChoice& c = s.choices[k];
+  // A step is a function of where the foot goes (sim::Leg's steps are independent): methods that
+  // choose the same spot, or whose truth's best is one, share it.
+  std::map<std::pair<double, double>, sim::LegOutcome> steps;
+  const auto stepOn = [&](double x, double y) {
+    const auto key = std::make_pair(x, y);
+    if (const auto it = steps.find(key); it != steps.end()) return it->second;
+    base::Stopwatch t;
+    const sim::LegOutcome o = leg.step(x, y);
+    s.addTime("leg", t.seconds());
+    return steps.emplace(key, o).first->second;
+  };
+  // The leg's figures at (x, y), and the rigid disk's tilt there on the truth; nulls without a spot.
+  const auto outcome = [&](double x, double y) {
     nlohmann::ordered_json j;
-    j["x_m"] = jsonNumber(c.x_m);
-    j["y_m"] = jsonNumber(c.y_m);
-    if (!std::isfinite(c.x_m)) {
+    j["x_m"] = jsonNumber(x);
+    j["y_m"] = jsonNumber(y);
+    if (!std::isfinite(x)) {
       for (const char* key : {"tilt_deg", "sink_m", "slip_m"}) j[key] = nullptr;
       j["settled"] = false;
-    } else {
-      base::Stopwatch t;
-      const sim::LegOutcome o = leg.step(c.x_m, c.y_m);
-      s.addTime("leg", t.seconds());
-      const auto rest = sim::restingDisk(heights, grid.cell, x0, y0, c.x_m, c.y_m, config.foot_diameter_m);
-      j["tilt_deg"] = o.tilt_deg;
-      j["sink_m"] = o.sink_m;
-      j["slip_m"] = o.slip_m;
-      j["settled"] = o.settled;
-      j["contact_cap_reached"] = o.contact_cap_reached;
-      j["predicted_tilt_deg"] = rest ? jsonNumber(rest->tilt_deg) : nlohmann::ordered_json(nullptr);
-      char predicted[32] = "-", line[220];
-      if (rest) std::snprintf(predicted, sizeof predicted, "%.2f deg", rest->tilt_deg);
-      std::snprintf(line, sizeof line, "leg       %-21s tilt %5.2f deg (rigid disk on the truth: %s), sink %.1f mm, slip %.1f mm%s%s",
-                    c.method.c_str(), o.tilt_deg, predicted, 1000 * o.sink_m, 1000 * o.slip_m,
-                    o.settled ? "" : ", NOT SETTLED", o.contact_cap_reached ? ", CONTACT CAP REACHED" : "");
+      j["predicted_tilt_deg"] = nullptr;
+      return j;
+    }
+    const sim::LegOutcome o = stepOn(x, y);
+    const auto rest = sim::restingDisk(heights, grid.cell, x0, y0, x, y, config.foot_diameter_m);
+    j["tilt_deg"] = o.tilt_deg;
+    j["sink_m"] = o.sink_m;
+    j["slip_m"] = o.slip_m;
+    j["settled"] = o.settled;
+    j["contact_cap_reached"] = o.contact_cap_reached;
+    j["predicted_tilt_deg"] = rest ? jsonNumber(rest->tilt_deg) : nlohmann::ordered_json(nullptr);
+    return j;
+  };
+  const auto metricsOf = [](const nlohmann::ordered_json& j) {
+    nlohmann::ordered_json m;
+    for (const char* key : {"tilt_deg", "sink_m", "slip_m", "settled", "predicted_tilt_deg"}) m[key] = j[key];
+    return m;
+  };
+  const auto degrees = [](const nlohmann::ordered_json& v) {
+    char text[32] = "-";
+    if (v.is_number()) std::snprintf(text, sizeof text, "%.2f deg", v.get<double>());
+    return std::string(text);
+  };
+  for (std::size_t k = 0; k < s.choices.size(); ++k) {
+    const FootfallChoice& c = s.choices[k];
+    nlohmann::ordered_json j = outcome(c.x_m, c.y_m);
+    const nlohmann::ordered_json best = outcome(c.truth_best_x_m, c.truth_best_y_m);
+    if (std::isfinite(c.x_m)) {
+      char line[300];
+      std::snprintf(line, sizeof line,
+                    "leg       %-21s tilt %5.2f deg (rigid disk on the truth: %s), sink %.1f mm, slip %.1f mm%s%s; "
+                    "on the truth's best: tilt %s",
+                    c.method.c_str(), j["tilt_deg"].get<double>(), degrees(j["predicted_tilt_deg"]).c_str(),
+                    1000 * j["sink_m"].get<double>(), 1000 * j["slip_m"].get<double>(),
+                    j["settled"].get<bool>() ? "" : ", NOT SETTLED",
+                    j["contact_cap_reached"].get<bool>() ? ", CONTACT CAP REACHED" : "",
+                    degrees(best["tilt_deg"]).c_str());
       s.say(line);
     }
+    j["truth_best"] = best;
     writeJson(s.out / "leg" / (c.method + ".json"), j);
-    nlohmann::ordered_json m;
-    for (const char* key : {"tilt_deg", "sink_m", "slip_m", "settled"}) m[key] = j[key];
-    s.metrics["footfall"][k]["leg"] = m;
+    s.metrics["footfall"][k]["leg"] = metricsOf(j);
+    s.metrics["footfall"][k]["truth_best"]["leg"] = metricsOf(best);
   }
 }
 

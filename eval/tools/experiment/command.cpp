@@ -1,4 +1,4 @@
-// `ambler experiment locus-vs-cartesian|matching|acceptance|descent` (docs/experiments/): the
+// `ambler experiment locus-vs-cartesian|matching|acceptance|footfall|descent` (docs/experiments/): the
 // paper's experiments and ours as sweeps; each prints its markdown table.
 #include <CLI/CLI.hpp>
 #include <cstdio>
@@ -81,6 +81,13 @@ void addExperimentCommands(CLI::App& app, Commands& out) {
                      "DIR/table.md and each terrain's DIR/TERRAIN/results.csv.",
                      "A reduced run: the first seed of each terrain", "Directory of acceptance_{mars,fractal,dem}_seeds.yaml",
                      "Run nothing: report DIR/TERRAIN/results.csv as they are", runAcceptance, reportAcceptance);
+
+  addSweepExperiment(experiment, out, "footfall",
+                     "Footfalls stepped on by the leg, 200 trials a soil and on poorly seen ground: DIR/table.md, "
+                     "DIR/*_tilt.png, DIR/*_slip.png and each sweep's DIR/<sweep>/results.csv.",
+                     quick, "Directory of footfall_trials.yaml and footfall_poorly_seen.yaml",
+                     "Run nothing: report DIR/<sweep>/results.csv as they are (e.g. merged from shards)", runFootfall,
+                     reportFootfall);
 
   struct Descent {
     Common common;

@@ -43,6 +43,14 @@ std::string reportMatching(const ExperimentOptions& options);
 std::string runAcceptance(const ExperimentOptions& options);
 std::string reportAcceptance(const ExperimentOptions& options);
 
+// Runs footfall_trials.yaml and footfall_poorly_seen.yaml into out/footfall_trials/ and
+// out/footfall_poorly_seen/, then reportFootfall: writes out/table.md (per sweep, soil and method:
+// successes with a 95 % interval, tilt, slip, true percentile, regret, the truth's best stepped on,
+// the misses by cause) and out/*_{tilt,slip}.png, and returns the markdown. Throws SweepError for a
+// bad sweep file, a sweep without the seed axis or without footfall and leg sections, or a failed run.
+std::string runFootfall(const ExperimentOptions& options);
+std::string reportFootfall(const ExperimentOptions& options);
+
 // `ambler experiment descent` (docs/experiments/descent.md): iconicGradientDescent's four departures
 // from the paper's descent (IconicOptions::descent_*), on the acceptance experiment's pairs.
 struct DescentOptions {

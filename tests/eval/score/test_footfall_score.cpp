@@ -73,5 +73,20 @@ TEST(FootfallScore, NoCandidateIsAllNaNAndNullInJson) {
                       R"("regret":null,"truth_best":{"x_m":null,"y_m":null,"score":null}})");
 }
 
+// The miss's cause as the decision it documents: held; nothing in R rests within 5°; the disk
+// rests within 5° here but the leg did not hold; the truth's best would have; neither would.
+TEST(FootfallScore, MissCauseFollowsItsRules) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(missCause(4.9, 0.009, true, 9, 9, 9), MissCause::None);  // held, whatever the disk says
+  EXPECT_EQ(missCause(4.9, 0.009, false, 1, 1, 1), MissCause::Leg);  // not settled is a miss
+  EXPECT_EQ(missCause(6, 0, true, 1, 1, 5.1), MissCause::Ground);
+  EXPECT_EQ(missCause(6, 0, true, 1, 1, nan), MissCause::Ground);  // no rest anywhere
+  EXPECT_EQ(missCause(3, 0.02, true, 5, 9, 1), MissCause::Leg);    // a slip where the disk rests within 5°
+  EXPECT_EQ(missCause(8, 0, true, 7, 5, 1), MissCause::Map);
+  EXPECT_EQ(missCause(8, 0, true, 7, 6, 1), MissCause::Method);
+  EXPECT_EQ(missCause(8, 0, true, nan, nan, 1), MissCause::Method);  // no rest at either spot
+  EXPECT_STREQ(missCauseName(MissCause::Map), "map");
+}
+
 }  // namespace
 }  // namespace ambler::eval

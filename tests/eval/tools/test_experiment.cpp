@@ -264,6 +264,97 @@ TEST(ExperimentMatching, QuickRunReportsEveryMethodAtTheCorners) {
   EXPECT_EQ(slurp(out.dir / "basin.png"), png);
 }
 
+// ---- the footfall study ----
+
+// Both sweeps of the footfall study over the sandbox (trials: seeds 1-4 x sand/rock; poorly seen:
+// seeds 1-2 x sand/rock; the last axis fastest) and their results.csv, made by hand.
+struct HandMadeFootfall {
+  TempDir dir{"footfall-hand"};
+  ExperimentOptions opt;
+  static std::string header() {
+    std::string h = "run,seed,leg.soil,footfall_region.known_fraction,footfall_region.min_predicted_tilt_deg,"
+                    "footfall.0.method,footfall.0.x_m,footfall.0.truth_percentile,footfall.0.regret";
+    for (const char* leg : {"leg", "truth_best.leg"})
+      for (const char* key : {"tilt_deg", "slip_m", "settled", "predicted_tilt_deg"})
+        h += std::string(",footfall.0.") + leg + "." + key;
+    return h + "\n";
+  }
+  HandMadeFootfall() {
+    const std::string base = (fs::path(AMBLER_SOURCE_DIR) / "scenarios" / "experiments" / "sandbox.yaml").string();
+    write(dir.dir / "sweeps" / "footfall_trials.yaml",
+          "name: ft\nbase: " + base + "\naxes:\n  seed: [1, 2, 3, 4]\n  leg.soil: [sand, rock]\n");
+    write(dir.dir / "sweeps" / "footfall_poorly_seen.yaml",
+          "name: fp\nbase: " + base + "\naxes:\n  seed: [1, 2]\n  leg.soil: [sand, rock]\n");
+    // Run k (seed k / 2 + 1, sand for even k, rock for odd): known fraction, the region's lowest
+    // rest tilt, percentile, regret; the leg's tilt, slip, settled and rest tilt at the choice; the
+    // same at the truth's best. Sand (runs 0, 2, 4, 6): a success; a miss the rigid disk did not
+    // predict (leg); a tilted spot where the truth's best holds (map); both tilted (method). Rock
+    // (runs 1, 3, 5, 7): two successes, a slip miss the disk did not predict (leg), and ground
+    // where no candidate rests within 5° (lowest 6°).
+    const char* trials[] = {
+        "1,0.5,0.1,0.001,2,0.002,true,2.1,1,0.001,true,1",
+        "1,0.5,0.1,0.001,1,0.001,true,1,1,0.001,true,1",
+        "1,0.5,0.2,0.002,7,0.003,true,3,1,0.001,true,1",
+        "1,0.5,0.1,0.001,1,0.001,true,1,1,0.001,true,1",
+        "1,0.5,0.3,0.003,9,0.004,true,8,1,0.001,true,2",
+        "1,0.5,0.1,0.001,4,0.02,true,3,1,0.001,true,1",
+        "1,3,0.4,0.004,12,0.005,true,11,9,0.001,true,9",
+        "1,6,0.9,0.01,8,0.001,true,8,8,0.001,true,8",
+    };
+    // Each row: known, lowest rest tilt, then the method's columns after its name and x.
+    std::string csv = header();
+    for (int k = 0; k < 8; ++k) {
+      const std::string row = trials[k];
+      const std::size_t cut = row.find(',', row.find(',') + 1);  // after the known and lowest rest tilt
+      csv += std::to_string(k) + "," + std::to_string(k / 2 + 1) + (k % 2 ? ",rock," : ",sand,") + row.substr(0, cut) +
+             ",equilibrium,0.5" + row.substr(cut) + "\n";
+    }
+    write(dir.dir / "out" / "footfall_trials" / "results.csv", csv);
+    std::string poor = header();
+    for (int k = 0; k < 4; ++k)
+      poor += std::to_string(k) + "," + std::to_string(k / 2 + 1) + (k % 2 ? ",rock," : ",sand,") +
+              (k < 2 ? "0.5" : "0.6") + ",0.5,equilibrium,0.5,0.1,0.001,2,0.002,true,2,1,0.001,true,1\n";
+    write(dir.dir / "out" / "footfall_poorly_seen" / "results.csv", poor);
+    opt.sweeps = dir.dir / "sweeps";
+    opt.out = dir.dir / "out";
+    opt.progress = false;
+  }
+};
+
+// The table's row of `method` in the section after `heading` (the first table after it).
+std::string rowAfter(const std::string& md, const std::string& heading, const std::string& method) {
+  const std::size_t at = md.find(heading);
+  if (at == std::string::npos) return "";
+  const std::size_t row = md.find("| `" + method + "` |", at);
+  return row == std::string::npos ? "" : md.substr(row, md.find('\n', row) - row);
+}
+
+TEST(ExperimentFootfall, ReportCountsIntervalsAndCausesOfHandMadeRows) {
+  HandMadeFootfall study;
+  const std::string md = reportFootfall(study.opt);
+  EXPECT_EQ(md, slurp(study.opt.out / "table.md"));
+  // Sand: 1 of 4 held; Wilson's 95 % interval for 1/4 is 0.0456-0.6994 (Newcombe 1998's table).
+  // Tilts 2, 7, 9, 12: median 8, p95 9 + 0.85·3 = 11.55; slips 2-5 mm: median 3.5; percentiles
+  // 0.1-0.4: median 25 %, p90 0.3 + 0.7·0.1 = 37 %; regrets 1-4e-3: median 0.0025; the truth's
+  // best held in 3 of 4 (0.3006-0.9544); misses: one each of map, method and leg.
+  EXPECT_EQ(rowAfter(md, "## footfall_trials", "equilibrium"),
+            "| `equilibrium` | 1/4 = 25.0 % (4.6–69.9 %) | 8.00 / 11.55 / 12.00 | 3.5 / 5.0 | 25 % / 37 % | 0.0025 | "
+            "3/4 = 75.0 % (30.1–95.4 %) | 1 / 1 / 1 / 0 |") << md;
+  // Rock: 2 of 4 (0.1500-0.8500); the slip miss is the leg's, the last the ground's.
+  const std::size_t rock = md.find("**rock**");
+  ASSERT_NE(rock, std::string::npos);
+  EXPECT_TRUE(rowAfter(md.substr(rock), "**rock**", "equilibrium").starts_with("| `equilibrium` | 2/4 = 50.0 % (15.0–85.0 %) |"))
+      << md;
+  EXPECT_NE(rowAfter(md.substr(rock), "**rock**", "equilibrium").find("| 0 / 0 / 1 / 1 |"), std::string::npos) << md;
+  // Poorly seen: R half unknown (known 0.5, 0.5, 0.6, 0.6: median 45 %).
+  EXPECT_NE(md.find("R unknown or in shadow on the map: median 45.0 %, from 40.0 to 50.0 %."), std::string::npos) << md;
+  for (const char* png : {"footfall_trials_sand_tilt.png", "footfall_trials_rock_slip.png", "footfall_poorly_seen_sand_tilt.png"})
+    EXPECT_FALSE(cv::imread((study.opt.out / png).string()).empty()) << png;
+  // Same rows, same bytes.
+  EXPECT_EQ(reportFootfall(study.opt), md);
+}
+
+
 // The composite experiment (docs/experiments/composite.md) against its goals, on ground truth:
 // with matched poses, RMS at most 3 cm at 10 cm cells, coverage above every single view's, and σ
 // calibrated: 60-76 % of the known cells within 1σ (a Gaussian error of the stated σ puts 68 %
