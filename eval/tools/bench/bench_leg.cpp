@@ -16,6 +16,7 @@
 #include "eval/scenario/io.hpp"
 #include "eval/score/stats.hpp"
 #include "eval/tools/bench/bench.hpp"
+#include "eval/tools/bench/bench_internal.hpp"
 #include "eval/tools/progress.hpp"
 #include "sim/leg.hpp"
 #include "sim/world.hpp"
@@ -39,14 +40,8 @@ nlohmann::ordered_json benchLeg(const Scenario& sc, const BenchOptions& opt) {
   if (!sc.footfall || !sc.leg)
     throw std::runtime_error(sc.file.string() + ": bench leg needs a scenario with footfall and leg sections");
   std::fprintf(stderr, "bench leg: building %s's world...\n", sc.name.c_str());
-  const fs::path dir = fs::temp_directory_path() / ("ambler-bench-leg-" + std::to_string(::getpid()));
-  struct Cleanup {
-    fs::path dir;
-    ~Cleanup() {
-      std::error_code ec;
-      fs::remove_all(dir, ec);
-    }
-  } cleanup{dir};
+  const bench_detail::ScratchDir scratch("leg");
+  const fs::path& dir = scratch.dir;
   const fs::path world = sc.terrain.kind == terrains::TerrainKind::Mjcf
                              ? fs::path(sc.terrain.mjcf)
                              : sim::writeWorld(scenarioTerrain(sc), dir, "bench");

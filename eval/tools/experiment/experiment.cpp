@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <initializer_list>
 #include <limits>
 #include <map>
@@ -80,6 +81,41 @@ fs::path runExperimentSweep(const Sweep& sweep, const fs::path& dir, int jobs, b
   so.jobs = jobs;
   so.progress = progress;
   return runSweep(sweep, so);
+}
+
+std::vector<Sweep> experimentSweeps(const ExperimentOptions& opt, const std::vector<std::string>& files,
+                                    const std::function<bool(const Scenario&)>& usable, const std::string& need) {
+  std::vector<Sweep> sweeps;
+  for (const std::string& file : files) {
+    Sweep s = experimentSweep(opt.sweeps / file, opt.quick);
+    requireAxes(s, {"seed"});
+    for (const Scenario& sc : s.runs)
+      if (!usable(sc)) throw SweepError(s.file.string() + ": the experiment needs " + need + " in every run");
+    sweeps.push_back(std::move(s));
+  }
+  return sweeps;
+}
+
+std::string writeTable(const ExperimentOptions& opt, const std::string& md) {
+  writeText(opt.out / "table.md", md);
+  return md;
+}
+
+std::string runSweepsAndReport(const std::vector<Sweep>& sweeps, const std::vector<std::string>& dirs,
+                               const ExperimentOptions& opt, const char* name,
+                               const std::function<std::string()>& report) {
+  const auto start = std::chrono::steady_clock::now();
+  std::size_t runs = 0;
+  for (std::size_t i = 0; i < sweeps.size(); ++i) {
+    runExperimentSweep(sweeps[i], opt.out / dirs.at(i), opt.jobs, opt.progress);
+    runs += sweeps[i].runs.size();
+  }
+  const std::string md = report();
+  if (opt.progress) {
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::fprintf(stderr, "ambler: experiment %s: %zu runs in %.1f s -> %s\n", name, runs, s, opt.out.string().c_str());
+  }
+  return md;
 }
 
 namespace {

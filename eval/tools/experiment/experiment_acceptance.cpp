@@ -6,7 +6,6 @@
 // truth than they started without being flagged. Three sweeps, then a report that reads only
 // their results.csv files.
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <string>
 #include <vector>
@@ -117,42 +116,19 @@ std::string report(const std::vector<Sweep>& sweeps, const ExperimentOptions& op
 }
 
 std::vector<Sweep> acceptanceSweeps(const ExperimentOptions& opt) {
-  std::vector<Sweep> sweeps;
-  for (const std::string& t : kTerrains) {
-    Sweep s = experimentSweep(opt.sweeps / ("acceptance_" + t + "_seeds.yaml"), opt.quick);
-    requireAxes(s, {"seed"});
-    for (const Scenario& sc : s.runs)
-      if (!sc.matching || sc.matching->methods.empty())
-        throw SweepError(s.file.string() + ": the experiment needs a matching section with methods in every run");
-    sweeps.push_back(std::move(s));
-  }
-  return sweeps;
-}
-
-std::string writeReport(const std::vector<Sweep>& sweeps, const ExperimentOptions& opt) {
-  const std::string md = report(sweeps, opt);
-  writeText(opt.out / "table.md", md);
-  return md;
+  std::vector<std::string> files;
+  for (const std::string& t : kTerrains) files.push_back("acceptance_" + t + "_seeds.yaml");
+  return experimentSweeps(opt, files, [](const Scenario& sc) { return sc.matching && !sc.matching->methods.empty(); },
+                          "a matching section with methods");
 }
 
 }  // namespace
 
 std::string runAcceptance(const ExperimentOptions& opt) {
-  const auto start = std::chrono::steady_clock::now();
   const std::vector<Sweep> sweeps = acceptanceSweeps(opt);
-  std::size_t runs = 0;
-  for (std::size_t i = 0; i < sweeps.size(); ++i) {
-    runExperimentSweep(sweeps[i], opt.out / kTerrains[i], opt.jobs, opt.progress);
-    runs += sweeps[i].runs.size();
-  }
-  const std::string md = writeReport(sweeps, opt);
-  if (opt.progress) {
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::fprintf(stderr, "ambler: experiment acceptance: %zu runs in %.1f s -> %s\n", runs, s, opt.out.string().c_str());
-  }
-  return md;
+  return runSweepsAndReport(sweeps, kTerrains, opt, "acceptance", [&] { return writeTable(opt, report(sweeps, opt)); });
 }
 
-std::string reportAcceptance(const ExperimentOptions& opt) { return writeReport(acceptanceSweeps(opt), opt); }
+std::string reportAcceptance(const ExperimentOptions& opt) { return writeTable(opt, report(acceptanceSweeps(opt), opt)); }
 
 }  // namespace ambler::eval

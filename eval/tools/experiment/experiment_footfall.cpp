@@ -6,7 +6,6 @@
 // the method, the leg, or ground where nothing holds); tilt and slip histograms. Two sweeps, then
 // a report that reads only their results.csv files.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -182,42 +181,18 @@ std::string report(const std::vector<Sweep>& sweeps, const ExperimentOptions& op
 }
 
 std::vector<Sweep> footfallSweeps(const ExperimentOptions& opt) {
-  std::vector<Sweep> sweeps;
-  for (const std::string& name : kSweeps) {
-    Sweep s = experimentSweep(opt.sweeps / (name + ".yaml"), opt.quick);
-    requireAxes(s, {"seed"});
-    for (const Scenario& sc : s.runs)
-      if (!sc.footfall || !sc.leg)
-        throw SweepError(s.file.string() + ": the experiment needs footfall and leg sections in every run");
-    sweeps.push_back(std::move(s));
-  }
-  return sweeps;
-}
-
-std::string writeReport(const std::vector<Sweep>& sweeps, const ExperimentOptions& opt) {
-  const std::string md = report(sweeps, opt);
-  writeText(opt.out / "table.md", md);
-  return md;
+  std::vector<std::string> files;
+  for (const std::string& name : kSweeps) files.push_back(name + ".yaml");
+  return experimentSweeps(opt, files, [](const Scenario& sc) { return sc.footfall && sc.leg; }, "footfall and leg sections");
 }
 
 }  // namespace
 
 std::string runFootfall(const ExperimentOptions& opt) {
-  const auto start = std::chrono::steady_clock::now();
   const std::vector<Sweep> sweeps = footfallSweeps(opt);
-  std::size_t runs = 0;
-  for (std::size_t i = 0; i < sweeps.size(); ++i) {
-    runExperimentSweep(sweeps[i], opt.out / kSweeps[i], opt.jobs, opt.progress);
-    runs += sweeps[i].runs.size();
-  }
-  const std::string md = writeReport(sweeps, opt);
-  if (opt.progress) {
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::fprintf(stderr, "ambler: experiment footfall: %zu runs in %.1f s -> %s\n", runs, s, opt.out.string().c_str());
-  }
-  return md;
+  return runSweepsAndReport(sweeps, kSweeps, opt, "footfall", [&] { return writeTable(opt, report(sweeps, opt)); });
 }
 
-std::string reportFootfall(const ExperimentOptions& opt) { return writeReport(footfallSweeps(opt), opt); }
+std::string reportFootfall(const ExperimentOptions& opt) { return writeTable(opt, report(footfallSweeps(opt), opt)); }
 
 }  // namespace ambler::eval

@@ -4,6 +4,7 @@
 // writing the figures. Not part of the eval library's interface. Defined in experiment.cpp.
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <initializer_list>
 #include <limits>
 #include <map>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "eval/pictures/plot.hpp"
+#include "eval/tools/experiment/experiment.hpp"
 #include "eval/tools/sweep/sweep.hpp"
 
 namespace ambler::eval::experiment_detail {
@@ -31,6 +33,21 @@ void requireAxes(const Sweep& sweep, std::initializer_list<const char*> keys);
 // Runs the sweep into `dir` (results.csv and runs/<k>/) with the experiment's jobs and progress.
 std::filesystem::path runExperimentSweep(const Sweep& sweep, const std::filesystem::path& dir, int jobs,
                                          bool progress);
+
+// The sweep files `files` of options.sweeps (each through experimentSweep: --quick reduces them),
+// each with a seed axis and every run `usable`; else SweepError naming the file and saying "the
+// experiment needs NEED in every run".
+std::vector<Sweep> experimentSweeps(const ExperimentOptions& options, const std::vector<std::string>& files,
+                                    const std::function<bool(const Scenario&)>& usable, const std::string& need);
+
+// Writes out/table.md and returns `md`.
+std::string writeTable(const ExperimentOptions& options, const std::string& md);
+
+// Runs each sweep into out/dirs[i] (runExperimentSweep), then `report`, and returns its markdown;
+// with progress on, prints "ambler: experiment NAME: N runs in T s -> OUT" on stderr.
+std::string runSweepsAndReport(const std::vector<Sweep>& sweeps, const std::vector<std::string>& dirs,
+                               const ExperimentOptions& options, const char* name,
+                               const std::function<std::string()>& report);
 
 struct Stat {
   double mean = kNaN, sd = kNaN;  // sd: sample standard deviation, NaN with fewer than two values
