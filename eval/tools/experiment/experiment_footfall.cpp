@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -45,8 +46,26 @@ bool success(const Results& r, std::size_t run, const std::string& prefix) {
 struct Tally {
   int trials = 0, successes = 0, best_trials = 0, best_successes = 0;
   int causes[5] = {0, 0, 0, 0, 0};  // by MissCause
+  int soil = 0;  // of the Leg misses on sand, those whose spot held on rigid ground (the same trial on rock)
   std::vector<double> tilt, slip, percentile, regret;
 };
+
+// The same trial on the other soil: the run whose axis cells are this run's but for leg.soil
+// (none when the sweep has no soil axis).
+std::optional<std::size_t> otherSoil(const Results& r, std::size_t run) {
+  const auto key = [&](std::size_t k) {
+    std::string text;
+    for (const SweepAxis& a : r.sweep().axes)
+      if (a.key != "leg.soil") text += r.cell(k, a.key) + "\x1f";
+    return text;
+  };
+  const std::string mine = key(run), soil = r.cell(run, "leg.soil");
+  if (soil.empty()) return std::nullopt;
+  for (const auto& group : r.groups())
+    for (const std::size_t other : group)
+      if (other != run && r.cell(other, "leg.soil") != soil && key(other) == mine) return other;
+  return std::nullopt;
+}
 
 Tally tally(const Results& r, std::size_t k, const std::string& soil) {
   Tally t;
@@ -71,6 +90,8 @@ Tally tally(const Results& r, std::size_t k, const std::string& soil) {
                                     r.value(run, ff(k, "truth_best.leg.predicted_tilt_deg")),
                                     r.value(run, "footfall_region.min_predicted_tilt_deg"));
       ++t.causes[int(c)];
+      if (c == MissCause::Leg && soil == "sand")
+        if (const auto rigid = otherSoil(r, run)) t.soil += success(r, *rigid, ff(k, "leg."));
     }
   return t;
 }
@@ -107,7 +128,8 @@ std::string table(const Results& r, const std::string& soil, const std::vector<s
     appendCell(line, format("%.3g", median(t.regret)));
     appendCell(line, rate(t.best_successes, t.best_trials));
     appendCell(line, std::to_string(t.causes[int(MissCause::Map)]) + " / " + std::to_string(t.causes[int(MissCause::Method)]) +
-                         " / " + std::to_string(t.causes[int(MissCause::Leg)]) + " / " +
+                         " / " + std::to_string(t.causes[int(MissCause::Leg)]) +
+                         (soil == "sand" ? " (" + std::to_string(t.soil) + ")" : std::string()) + " / " +
                          std::to_string(t.causes[int(MissCause::Ground)]));
     md += line + "\n";
   }
@@ -158,7 +180,8 @@ std::string report(const std::vector<Sweep>& sweeps, const ExperimentOptions& op
       "surface. Misses (docs/experiments/footfall.md, \"Where the misses come from\"): **ground**, no candidate of R "
       "rests a rigid disk within 5° on the truth; **leg**, the rigid disk rests within 5° at the chosen spot but "
       "the leg did not hold; **map**, the chosen spot tilts a rigid disk beyond 5° but the method's choice on the "
-      "true surface would not; **method**, both would.\n";
+      "true surface would not; **method**, both would. In brackets, on sand: of the leg's misses, those whose spot held "
+      "when the same trial was stepped on rigid ground (the sand's sinkage, not the leg's dynamics).\n";
   for (std::size_t i = 0; i < sweeps.size(); ++i) {
     const Results r(sweeps[i], opt.out / kSweeps[i] / "results.csv");
     const std::vector<std::string> names = methods(r);
