@@ -107,6 +107,10 @@ class Leg {
   // lies under it.
   LegOutcome step(double x, double y);
 
+  // An independent copy (the model copied, its own MuJoCo data; no file is read): its steps equal
+  // this leg's bit for bit, and the two may step at once on two threads.
+  Leg clone() const;
+
   bool cropped() const;       // the terrain was cropped (false: the whole world)
   int terrainGeoms() const;   // the world's geoms in the leg's model
   int droppedGeoms() const;   // the world's geoms left out by the crop
@@ -114,6 +118,7 @@ class Leg {
 
  private:
   struct Impl;
+  explicit Leg(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
 

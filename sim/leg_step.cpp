@@ -479,6 +479,24 @@ Leg::Leg(const std::filesystem::path& world_xml, const LegRegion& r, const LegCo
   s.dropped = crop->dropped;
 }
 
+Leg::Leg(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Leg Leg::clone() const {
+  const Impl& s = *impl_;
+  auto copy = std::make_unique<Impl>();
+  copy->world_xml = s.world_xml;
+  copy->config = s.config;
+  copy->region = s.region, copy->bounds = s.bounds;
+  copy->probe_top = s.probe_top;
+  copy->cropped = s.cropped;
+  copy->dropped = s.dropped;
+  mjModel* m = mj_copyModel(nullptr, s.model.get());
+  if (!m) throw std::runtime_error(s.world_xml.string() + ": MuJoCo could not copy the leg's model");
+  copy->setUp(ModelPtr(m));
+  copy->original = s.original;  // the heightfield as built (this one's may be lowered by its last step)
+  return Leg(std::move(copy));
+}
+
 Leg::Leg(Leg&&) noexcept = default;
 Leg& Leg::operator=(Leg&&) noexcept = default;
 Leg::~Leg() = default;

@@ -2,6 +2,8 @@
 // on sand, a flat-topped rock, a ledge, and the quasi-static resting disk.
 #include <gtest/gtest.h>
 
+#include <thread>
+
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -233,6 +235,18 @@ TEST(Leg, StepsAreIndependentOfEachOther) {
   EXPECT_EQ(cropped.fallbacks(), 0);
   EXPECT_THROW(cropped.step(0.7, 0.5), std::invalid_argument);
   EXPECT_THROW(Leg(w.xml, LegRegion{0.6, 0.0, 0.0, 0.6}, c), std::invalid_argument);
+
+  // A clone, taken after steps lowered the sand, steps as the original does; the two step at
+  // once on two threads and still give stepLeg's outcome.
+  Leg twin = cropped.clone();
+  EXPECT_TRUE(twin.cropped());
+  EXPECT_EQ(twin.terrainGeoms(), cropped.terrainGeoms());
+  LegOutcome a, b;
+  std::thread other([&] { a = twin.step(0.5, 0.5); });
+  b = cropped.step(0.5, 0.5);
+  other.join();
+  expectSame(a, fresh);
+  expectSame(b, fresh);
 }
 
 // leg.xml (the world plus the leg) is plain MJCF that MuJoCo loads, e.g. in `simulate`.

@@ -6,11 +6,15 @@
 // have given). world/leg.xml (the world with the leg, for MuJoCo's simulate), leg/METHOD.json,
 // leg/predicted_tilt.tiff (every candidate), metrics.footfall[k].leg and .truth_best.leg,
 // metrics.footfall_region's rigid-disk figures.
+#include <tbb/parallel_invoke.h>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
-#include <map>
+#include <thread>
 #include <utility>
+#include <vector>
 
 #include "eval/scenario/io.hpp"
 #include "eval/run/stages.hpp"
@@ -78,16 +82,29 @@ void run(RunState& s) {
   base::Stopwatch build;
   sim::Leg leg(s.world_xml, legRegion(sc), config);
   s.addTime("leg", build.seconds());
-  // A step is a function of where the foot goes (sim::Leg's steps are independent): methods that
-  // choose the same spot, or whose truth's best is one, share it.
-  std::map<std::pair<double, double>, sim::LegOutcome> steps;
-  const auto stepOn = [&](double x, double y) {
-    const auto key = std::make_pair(x, y);
-    if (const auto it = steps.find(key); it != steps.end()) return it->second;
+  // A step is a function of where the foot goes (sim::Leg's steps are independent): every spot
+  // (each method's choice and its truth's best) is stepped on once, by two legs at once where
+  // there are two spots and two cores (Leg::clone: the same outcomes, bit for bit).
+  std::vector<std::pair<double, double>> spots;
+  for (const FootfallChoice& c : s.choices)
+    for (const auto& xy : {std::make_pair(c.x_m, c.y_m), std::make_pair(c.truth_best_x_m, c.truth_best_y_m)})
+      if (std::isfinite(xy.first) && std::find(spots.begin(), spots.end(), xy) == spots.end()) spots.push_back(xy);
+  std::vector<sim::LegOutcome> outcomes(spots.size());
+  {
     base::Stopwatch t;
-    const sim::LegOutcome o = leg.step(x, y);
+    const auto stepEvery = [&](sim::Leg& l, std::size_t first) {
+      for (std::size_t i = first; i < spots.size(); i += 2) outcomes[i] = l.step(spots[i].first, spots[i].second);
+    };
+    if (spots.size() > 1 && std::thread::hardware_concurrency() > 1) {
+      sim::Leg twin = leg.clone();
+      tbb::parallel_invoke([&] { stepEvery(leg, 0); }, [&] { stepEvery(twin, 1); });
+    } else {
+      for (std::size_t i = 0; i < spots.size(); ++i) outcomes[i] = leg.step(spots[i].first, spots[i].second);
+    }
     s.addTime("leg", t.seconds());
-    return steps.emplace(key, o).first->second;
+  }
+  const auto stepOn = [&](double x, double y) {
+    return outcomes[std::size_t(std::find(spots.begin(), spots.end(), std::make_pair(x, y)) - spots.begin())];
   };
   // The leg's figures at (x, y), and the rigid disk's tilt there on the truth; nulls without a spot.
   const auto outcome = [&](double x, double y) {
