@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -40,44 +41,56 @@ namespace stages {
 
 namespace {
 
+// The true surface on the footfall map's grid (the footfall stage's), rows flipped to
+// restingDisk's (row 0 at the smallest y), and where its first cell's centre lies.
+struct TrueHeights {
+  Eigen::MatrixXf heights;
+  double cell, x0, y0;
+  std::optional<sim::DiskRest> rest(double x, double y, double diameter_m) const {
+    return sim::restingDisk(heights, cell, x0, y0, x, y, diameter_m);
+  }
+};
+
+TrueHeights trueHeights(const RunState& s) {
+  const perception::MapGrid& grid = s.footfall_truth->grid();
+  return {s.footfall_truth->elevation().colwise().reverse(), grid.cell, grid.x_min + 0.5 * grid.cell,
+          grid.y_max - (grid.rows - 0.5) * grid.cell};
+}
+
+// The prediction for every candidate centre of the region: the tilt a rigid disk rests at on the
+// true surface (leg/predicted_tilt.tiff, NaN outside the region or where no rest exists); and
+// whether any candidate of R could hold: the smallest rest tilt and the share of candidates within
+// the goal's 5° (metrics.footfall_region; docs/experiments/footfall.md, "Where the misses come from").
+void predictedTilts(RunState& s, const TrueHeights& truth, double diameter_m) {
+  const perception::MapGrid& grid = s.footfall_truth->grid();
+  const perception::CellRegion region = s.scenario.footfall->candidates(grid);
+  perception::Raster<float> tilt =
+      perception::Raster<float>::Constant(grid.rows, grid.cols, std::numeric_limits<float>::quiet_NaN());
+  double lowest = std::numeric_limits<double>::quiet_NaN();
+  long within = 0;
+  const long candidates = long(region.rows) * region.cols;
+  for (int r = region.row0; r < region.row0 + region.rows; ++r)
+    for (int c = region.col0; c < region.col0 + region.cols; ++c) {
+      const Eigen::Vector2d xy = grid.center(r, c);
+      const auto rest = truth.rest(xy.x(), xy.y(), diameter_m);
+      if (!rest) continue;
+      tilt(r, c) = float(rest->tilt_deg);
+      if (!(tilt(r, c) >= lowest)) lowest = tilt(r, c);
+      within += tilt(r, c) <= 5.0f;
+    }
+  writeGeoTiff(s.out / "leg" / "predicted_tilt.tiff", tilt, grid, s.geo);
+  s.metrics["footfall_region"]["min_predicted_tilt_deg"] = jsonNumber(lowest);
+  s.metrics["footfall_region"]["predicted_within_5deg_fraction"] =
+      jsonNumber(candidates ? double(within) / double(candidates) : std::numeric_limits<double>::quiet_NaN());
+}
+
 void run(RunState& s) {
   const Scenario& sc = s.scenario;
   const sim::LegConfig config = legConfig(sc);
   sim::writeLegWorld(s.world_xml, config);
   std::filesystem::create_directories(s.out / "leg");
-  // The true surface on the footfall map's grid (the footfall stage's), rows flipped to
-  // restingDisk's (row 0 at the smallest y).
-  const perception::MapGrid& grid = s.footfall_truth->grid();
-  const Eigen::MatrixXf heights = s.footfall_truth->elevation().colwise().reverse();
-  const double x0 = grid.x_min + 0.5 * grid.cell, y0 = grid.y_max - (grid.rows - 0.5) * grid.cell;
-  // The prediction for every candidate centre of the region: the tilt a rigid disk rests at on the
-  // true surface (leg/predicted_tilt.tiff, NaN outside the region or where no rest exists).
-  {
-    const FootfallSpec& ff = *sc.footfall;
-    const perception::CellRegion region = ff.candidates(grid);
-    perception::Raster<float> tilt =
-        perception::Raster<float>::Constant(grid.rows, grid.cols, std::numeric_limits<float>::quiet_NaN());
-    for (int r = region.row0; r < region.row0 + region.rows; ++r)
-      for (int c = region.col0; c < region.col0 + region.cols; ++c) {
-        const Eigen::Vector2d xy = grid.center(r, c);
-        if (const auto rest = sim::restingDisk(heights, grid.cell, x0, y0, xy.x(), xy.y(), config.foot_diameter_m))
-          tilt(r, c) = float(rest->tilt_deg);
-      }
-    writeGeoTiff(s.out / "leg" / "predicted_tilt.tiff", tilt, grid, s.geo);
-    // Could any candidate of R hold? The smallest rest tilt and the share of candidates within the
-    // goal's 5° (docs/experiments/footfall.md, "Where the misses come from").
-    double lowest = std::numeric_limits<double>::quiet_NaN();
-    long within = 0, candidates = long(region.rows) * region.cols;
-    for (int r = region.row0; r < region.row0 + region.rows; ++r)
-      for (int c = region.col0; c < region.col0 + region.cols; ++c)
-        if (std::isfinite(tilt(r, c))) {
-          if (!(tilt(r, c) >= lowest)) lowest = tilt(r, c);
-          within += tilt(r, c) <= 5.0f;
-        }
-    s.metrics["footfall_region"]["min_predicted_tilt_deg"] = jsonNumber(lowest);
-    s.metrics["footfall_region"]["predicted_within_5deg_fraction"] =
-        jsonNumber(candidates ? double(within) / double(candidates) : std::numeric_limits<double>::quiet_NaN());
-  }
+  const TrueHeights truth = trueHeights(s);
+  predictedTilts(s, truth, config.foot_diameter_m);
   // Built once, on the world cropped to the footfall region, which holds every choice.
   base::Stopwatch build;
   sim::Leg leg(s.world_xml, legRegion(sc), config);
@@ -118,7 +131,7 @@ void run(RunState& s) {
       return j;
     }
     const sim::LegOutcome o = stepOn(x, y);
-    const auto rest = sim::restingDisk(heights, grid.cell, x0, y0, x, y, config.foot_diameter_m);
+    const auto rest = truth.rest(x, y, config.foot_diameter_m);
     j["tilt_deg"] = o.tilt_deg;
     j["sink_m"] = o.sink_m;
     j["slip_m"] = o.slip_m;
