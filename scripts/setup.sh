@@ -18,6 +18,8 @@ packages=(
   libgdal-dev gdal-bin              # terrain.kind: dem (GeoTIFF in), GeoTIFF map rasters out, gdalinfo in tests
   gnuplot-nox fonts-dejavu-core     # the charts of figures and reports (eval/plot.cpp runs gnuplot)
   chromium                          # tests/eval/report_chromium.sh: the report as a browser renders it
+  python3-dev pybind11-dev          # the Python module (python/, docs/python.md); optional to the build
+  python3-numpy python3-pytest      # its arrays and its tests
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -10,6 +10,10 @@ namespace fs = std::filesystem;
 
 
 nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
+  return runScenarioKeeping(sc, opt).metrics;
+}
+
+RunProducts runScenarioKeeping(const Scenario& sc, const RunOptions& opt) {
   base::Stopwatch total;
   RunState state{sc, opt.out, opt.progress};
   // No directory yet: the world stage makes it once the views are checked against the terrain,
@@ -31,7 +35,15 @@ nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
             ", " + (state.out / "scans").string() + "/, " + (sc.map ? (state.out / "maps").string() + "/, " : std::string()) +
             (sc.matching ? (state.out / "matching").string() + "/, " : std::string()) +
             (state.out / "world").string() + "/");
-  return metrics;
+  RunProducts products;
+  products.metrics = std::move(metrics);
+  for (std::size_t k = 0; k < state.views.size(); ++k) {
+    ViewState& v = state.views[k];
+    if (v.locus) products.maps.emplace_back("view_" + std::to_string(k), std::move(v.locus->map));
+    if (v.scan) products.scans.push_back(std::move(v.scan->image));
+  }
+  if (state.composite) products.maps.emplace_back("composite", std::move(*state.composite));
+  return products;
 }
 
 }  // namespace ambler::eval
