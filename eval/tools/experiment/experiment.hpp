@@ -4,8 +4,9 @@
 // across surface orientation and noise, and across map resolution
 // (docs/experiments/locus_vs_cartesian.md). matching: every matching method against the rover's
 // initial error (docs/experiments/matching.md). acceptance: the rover's verdict on every
-// registration against the truth (docs/experiments/acceptance.md). descent: the iconic descent's
-// departures from the paper's, one at a time (docs/experiments/descent.md).
+// registration against the truth (docs/experiments/acceptance.md). footfall: footfalls stepped on
+// by the leg, 200 trials a soil and on poorly seen ground (docs/experiments/footfall.md). descent:
+// the iconic descent's departures from the paper's, one at a time (docs/experiments/descent.md).
 #include <filesystem>
 #include <string>
 
