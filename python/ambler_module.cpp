@@ -7,14 +7,14 @@
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>
 
-#include <cstdlib>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
-#include <system_error>
 #include <utility>
 #include <vector>
 
+#include "base/temp_dir.hpp"
 #include "eval/run/runner.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "eval/tools/sweep/sweep.hpp"
@@ -62,15 +62,9 @@ py::array view(const perception::Raster<T>& r, const py::object& base) {
 // One run: its directory, metrics (as metrics.json), maps and scans.
 struct PyRun {
   std::shared_ptr<RunProducts> products;
+  std::optional<base::TempDir> temporary;  // out, when the caller gave none: removed with the run
   fs::path out;
-  bool temporary = false;
   py::object metrics;
-  ~PyRun() {
-    if (temporary) {
-      std::error_code ec;
-      fs::remove_all(out, ec);
-    }
-  }
 };
 
 std::shared_ptr<PyRun> run(const PyScenario& sc, const std::optional<fs::path>& out) {
@@ -78,10 +72,7 @@ std::shared_ptr<PyRun> run(const PyScenario& sc, const std::optional<fs::path>& 
   if (out) {
     r->out = *out;
   } else {
-    std::string dir = (fs::temp_directory_path() / "ambler-python-XXXXXX").string();
-    if (!::mkdtemp(dir.data())) throw std::runtime_error("ambler.run: cannot make a temporary run directory");
-    r->out = dir;
-    r->temporary = true;
+    r->out = r->temporary.emplace("python").path();
   }
   RunOptions opt;
   opt.out = r->out;

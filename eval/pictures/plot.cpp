@@ -27,6 +27,7 @@
 
 #include "eval/scenario/io.hpp"
 #include "base/digest.hpp"
+#include "base/temp_dir.hpp"
 #include "base/text.hpp"
 
 extern char** environ;  // the child's environment starts from ours (unistd.h declares it only with _GNU_SOURCE)
@@ -143,24 +144,6 @@ std::string keyCorner(const PlotSpec& spec, const Layout& l, int width, int heig
   }
   return best;
 }
-
-// Removes the temporary directory however renderPlot leaves.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    std::string pattern = (fs::temp_directory_path() / "ambler-plot-XXXXXX").string();
-    if (!::mkdtemp(pattern.data()))
-      throw std::runtime_error(pattern + ": cannot create a temporary directory: " +
-                               std::error_code(errno, std::generic_category()).message());
-    path = pattern;
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-};
 
 std::string lastLine(const fs::path& file) {
   std::ifstream in(file);
@@ -325,14 +308,14 @@ cv::Mat renderPlot(const PlotSpec& spec, int width, int height) {
     createOutDir(keep);
     writeText(fs::path(keep) / (stem + ".gp"), gnuplotScript(spec, width, height, stem + ".png"));
   }
-  TempDir dir;
-  const fs::path png = dir.path / "plot.png", script = dir.path / "plot.gp";
+  const base::TempDir dir("plot");
+  const fs::path png = dir.path() / "plot.png", script = dir.path() / "plot.gp";
   {
     std::ofstream out(script, std::ios::binary);
     out << gnuplotScript(spec, width, height, png.string());
     if (!out.flush()) throw std::runtime_error(script.string() + ": write failed");
   }
-  runGnuplot(dir.path, script);
+  runGnuplot(dir.path(), script);
   cv::Mat img = cv::imread(png.string(), cv::IMREAD_COLOR);
   if (img.empty() || img.cols != width || img.rows != height)
     throw std::runtime_error("gnuplot wrote no " + std::to_string(width) + " x " + std::to_string(height) + " PNG");

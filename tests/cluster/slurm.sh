@@ -147,29 +147,22 @@ submit() {
   if [[ $outs -ne 3 ]]; then echo "FAIL $what: $outs of 3 array tasks left their slurm-JOB_TASK.out"; return 1; fi
 }
 
-# The sweep, as docs/sweeps.md says: submit, wait, merge; then the same sweep in one process.
-mkdir -p "$tmp/sweep"
-sweep=$here/sweep.yaml
-if submit sweep "$src/docs/examples/sweep.sbatch" "$sweep" runs; then  # DIR relative to the submit directory
-  echo "slurm: sweep job array done after $(elapsed)"
-  "$ambler" sweep "$sweep" --out "$tmp/sweep/runs" --merge --quiet || fail=1
-  "$ambler" sweep "$sweep" --out "$tmp/sweep/whole" --quiet || fail=1
-  same_bytes sweep "$tmp/sweep/whole/results.csv" "$tmp/sweep/runs/results.csv" || fail=1
-else
-  fail=1
-fi
-
-# A sweep of traverses, sharded the same way.
-mkdir -p "$tmp/traverse"
-traverse=$here/traverse.yaml
-if submit traverse "$src/docs/examples/sweep.sbatch" "$traverse" runs; then
-  echo "slurm: traverse job array done after $(elapsed)"
-  "$ambler" sweep "$traverse" --out "$tmp/traverse/runs" --merge --quiet || fail=1
-  "$ambler" sweep "$traverse" --out "$tmp/traverse/whole" --quiet || fail=1
-  same_bytes traverse "$tmp/traverse/whole/results.csv" "$tmp/traverse/runs/results.csv" || fail=1
-else
-  fail=1
-fi
+# A sweep as docs/sweeps.md says: submit NAME's job array, wait, merge; then the same sweep in one
+# process, whose results.csv the merge must equal byte for byte.
+sweep_on_slurm() {
+  local name=$1 file=$2
+  mkdir -p "$tmp/$name"
+  if submit "$name" "$src/docs/examples/sweep.sbatch" "$file" runs; then  # DIR relative to the submit directory
+    echo "slurm: $name job array done after $(elapsed)"
+    "$ambler" sweep "$file" --out "$tmp/$name/runs" --merge --quiet || return 1
+    "$ambler" sweep "$file" --out "$tmp/$name/whole" --quiet || return 1
+    same_bytes "$name" "$tmp/$name/whole/results.csv" "$tmp/$name/runs/results.csv" || return 1
+  else
+    return 1
+  fi
+}
+sweep_on_slurm sweep "$here/sweep.yaml" || fail=1
+sweep_on_slurm traverse "$here/traverse.yaml" || fail=1  # a sweep of traverses, sharded the same way
 
 # The basin, as docs/basin.md says.
 mkdir -p "$tmp/basin"

@@ -1,6 +1,6 @@
 #include "base/random.hpp"
 #include "eval/tools/bench/bench.hpp"
-#include "eval/tools/bench/bench_internal.hpp"
+#include "base/temp_dir.hpp"
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/global_control.h>
@@ -302,8 +302,8 @@ nlohmann::ordered_json benchMatch(const Scenario& sc, const BenchOptions& opt) {
     throw std::runtime_error(sc.file.string() + ": bench match needs a scenario with map and matching sections");
   if (sc.traverse) throw std::runtime_error(sc.file.string() + ": traverse: not yet supported by bench match");
   std::fprintf(stderr, "bench match: building %s's world, scans and maps...\n", sc.name.c_str());
-  const bench_detail::ScratchDir scratch("match");
-  const fs::path& dir = scratch.dir;
+  const base::TempDir scratch("bench-match");
+  const fs::path& dir = scratch.path();
   const sim::World world = sc.terrain.kind == terrains::TerrainKind::Mjcf
                                ? sim::World::load(sc.terrain.mjcf)
                                : sim::World::load(sim::writeWorld(scenarioTerrain(sc), dir, "bench"));

@@ -16,7 +16,7 @@
 #include "eval/scenario/io.hpp"
 #include "eval/score/stats.hpp"
 #include "eval/tools/bench/bench.hpp"
-#include "eval/tools/bench/bench_internal.hpp"
+#include "base/temp_dir.hpp"
 #include "eval/tools/progress.hpp"
 #include "sim/leg.hpp"
 #include "sim/world.hpp"
@@ -40,8 +40,8 @@ nlohmann::ordered_json benchLeg(const Scenario& sc, const BenchOptions& opt) {
   if (!sc.footfall || !sc.leg)
     throw std::runtime_error(sc.file.string() + ": bench leg needs a scenario with footfall and leg sections");
   std::fprintf(stderr, "bench leg: building %s's world...\n", sc.name.c_str());
-  const bench_detail::ScratchDir scratch("leg");
-  const fs::path& dir = scratch.dir;
+  const base::TempDir scratch("bench-leg");
+  const fs::path& dir = scratch.path();
   const fs::path world = sc.terrain.kind == terrains::TerrainKind::Mjcf
                              ? fs::path(sc.terrain.mjcf)
                              : sim::writeWorld(scenarioTerrain(sc), dir, "bench");

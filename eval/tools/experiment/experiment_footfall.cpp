@@ -110,13 +110,13 @@ std::string rate(int k, int n) {
          number(100 * ci.lo, 1) + "–" + number(100 * ci.hi, 1) + " %)";
 }
 
-std::string table(const Results& r, const std::string& soil, const std::vector<std::string>& names) {
+std::string table(const std::vector<Tally>& tallies, const std::string& soil, const std::vector<std::string>& names) {
   std::string md =
       "| method | tilt ≤ 5°, slip ≤ 1 cm (95 % CI) | tilt median / p95 / max, ° | slip median / max, mm | "
       "true percentile median / p90 | regret median | the truth's best, stepped on | misses: map / method / leg / "
       "ground |\n|---|---|---|---|---|---|---|---|\n";
   for (std::size_t k = 0; k < names.size(); ++k) {
-    const Tally t = tally(r, k, soil);
+    const Tally& t = tallies[k];
     std::string line = "|";
     appendCell(line, "`" + names[k] + "`");
     appendCell(line, rate(t.successes, t.trials));
@@ -139,14 +139,14 @@ std::string table(const Results& r, const std::string& soil, const std::vector<s
 // Cumulative histograms of tilt or slip per method: the share of steps at or below each value (a
 // staircase through the sorted values), with the goal's bound; where a method's line crosses the
 // bound is its share of steps within it.
-cv::Mat histogram(const Results& r, const std::string& soil, const std::vector<std::string>& names, bool tilt,
+cv::Mat histogram(const std::vector<Tally>& tallies, const std::vector<std::string>& names, bool tilt,
                   const std::string& title) {
   PlotSpec spec;
   spec.title = title;
   spec.x_label = tilt ? "foot tilt [deg]" : "slip [mm]";
   spec.y_label = "share of steps at or below";
   for (std::size_t k = 0; k < names.size(); ++k) {
-    const Tally t = tally(r, k, soil);
+    const Tally& t = tallies[k];
     std::vector<double> v = tilt ? t.tilt : t.slip;
     if (v.empty()) continue;
     if (!tilt)
@@ -193,10 +193,12 @@ std::string report(const std::vector<Sweep>& sweeps, const ExperimentOptions& op
     md += "\nR unknown or in shadow on the map: median " + number(100 * median(unknown), 1) + " %, from " +
           number(100 * quantile(unknown, 0), 1) + " to " + number(100 * quantile(unknown, 1), 1) + " %.\n";
     for (const std::string& soil : kSoils) {
-      md += "\n**" + soil + "**\n\n" + table(r, soil, names);
+      std::vector<Tally> tallies;  // per method, read once for the table and both histograms
+      for (std::size_t k = 0; k < names.size(); ++k) tallies.push_back(tally(r, k, soil));
+      md += "\n**" + soil + "**\n\n" + table(tallies, soil, names);
       const std::string stem = kSweeps[i] + "_" + soil;
-      writeFigure(opt.out / (stem + "_tilt.png"), histogram(r, soil, names, true, kSweeps[i] + ", " + soil + ": foot tilt"));
-      writeFigure(opt.out / (stem + "_slip.png"), histogram(r, soil, names, false, kSweeps[i] + ", " + soil + ": slip"));
+      writeFigure(opt.out / (stem + "_tilt.png"), histogram(tallies, names, true, kSweeps[i] + ", " + soil + ": foot tilt"));
+      writeFigure(opt.out / (stem + "_slip.png"), histogram(tallies, names, false, kSweeps[i] + ", " + soil + ": slip"));
     }
   }
   if (opt.quick) md += "\n(--quick: the first and last value of every axis and the first seed only.)\n";
