@@ -1,7 +1,9 @@
 // The Python module `ambler` (docs/python.md): load a scenario (with overrides, keys as in the YAML,
 // dotted for nesting), run it, and read its metrics, maps and scans as Python and numpy objects.
 // The C++ work runs without the GIL; the project's one-line errors arrive as Python exceptions
-// with the same text (ValueError for bad input, RuntimeError for a failed run).
+// with the same text (ValueError for bad input, RuntimeError for a failed run). The types Map,
+// Scan and View are bound here; registration.cpp and stages.cpp add the rest (bindings.hpp).
+#include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -15,48 +17,34 @@
 #include <vector>
 
 #include "base/temp_dir.hpp"
+#include "python/bindings.hpp"
 #include "eval/run/runner.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "eval/tools/sweep/sweep.hpp"
 
-namespace py = pybind11;
 namespace fs = std::filesystem;
 
-namespace ambler::eval {
-namespace {
+namespace ambler::python {
 
-// A loaded scenario and where it came from (relative paths in it resolve against its file).
-struct PyScenario {
-  Scenario scenario;
-};
+using eval::RunOptions;
+using eval::RunProducts;
+using eval::Scenario;
+
+namespace {
 
 // The scenario in `path` with `overrides` applied: each key (dotted for nesting, as a sweep's axis)
 // set to its value written as YAML flow text (JSON is YAML), checked by the scenario reader as a
 // one-run sweep over the file, so a bad key or value fails with the reader's line.
 PyScenario loadScenarioWith(const fs::path& path, const py::kwargs& overrides) {
-  if (overrides.empty()) return {loadScenario(path)};
+  if (overrides.empty()) return {eval::loadScenario(path)};
   const py::object dumps = py::module_::import("json").attr("dumps");
   std::string text = "name: python\nbase: " + fs::absolute(path).string() + "\naxes:\n";
   for (const auto& [key, value] : overrides)
     text += "  " + py::cast<std::string>(key) + ": [" + py::cast<std::string>(dumps(value)) + "]\n";
-  Sweep sweep = parseSweep(text, path);
+  eval::Sweep sweep = eval::parseSweep(text, path);
   Scenario s = std::move(sweep.runs.front());
-  s.name = loadScenario(path).name;  // the sweep names its runs NAME_K: keep the file's
+  s.name = eval::loadScenario(path).name;  // the sweep names its runs NAME_K: keep the file's
   return {std::move(s)};
-}
-
-// A map's rasters as numpy arrays that view the C++ memory, kept alive by the run that owns it.
-struct PyMap {
-  std::shared_ptr<RunProducts> owner;
-  const perception::ElevationMap* map = nullptr;
-};
-
-template <class T>
-py::array view(const perception::Raster<T>& r, const py::object& base) {
-  py::array a(py::dtype::of<T>(), {py::ssize_t(r.rows()), py::ssize_t(r.cols())},
-              {py::ssize_t(sizeof(T) * r.cols()), py::ssize_t(sizeof(T))}, r.data(), base);
-  a.attr("setflags")(py::arg("write") = false);  // the run's products: read-only views
-  return a;
 }
 
 // One run: its directory, metrics (as metrics.json), maps and scans.
@@ -79,27 +67,42 @@ std::shared_ptr<PyRun> run(const PyScenario& sc, const std::optional<fs::path>& 
   opt.progress = false;
   {
     py::gil_scoped_release release;
-    r->products = std::make_shared<RunProducts>(runScenarioKeeping(sc.scenario, opt));
+    r->products = std::make_shared<RunProducts>(eval::runScenarioKeeping(sc.scenario, opt));
   }
   r->metrics = py::module_::import("json").attr("loads")(r->products->metrics.dump());
   return r;
 }
 
 }  // namespace
-}  // namespace ambler::eval
 
-PYBIND11_MODULE(ambler, m) {
-  using namespace ambler::eval;
-  m.doc() = "ambler: the planetary-rover terrain-mapping testbed from Python (docs/python.md)";
-  py::register_exception<ScenarioError>(m, "ScenarioError", PyExc_ValueError);
-  py::register_exception<SweepError>(m, "OverrideError", PyExc_ValueError);
+py::array_t<double> poseArray(const Eigen::Isometry3d& T) {
+  py::array_t<double> a({4, 4});
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) a.mutable_at(i, j) = T.matrix()(i, j);
+  return a;
+}
 
-  py::class_<PyScenario>(m, "Scenario")
-      .def_property_readonly("name", [](const PyScenario& s) { return s.scenario.name; })
-      .def_property_readonly("seed", [](const PyScenario& s) { return s.scenario.seed; })
-      .def_property_readonly("file", [](const PyScenario& s) { return s.scenario.file.string(); });
+Eigen::Isometry3d poseFromArray(const py::handle& h, const char* what) {
+  const auto a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(h);
+  if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
+    throw py::value_error(std::string(what) + ": expected a 4 x 4 array (a pose)");
+  Eigen::Matrix4d M;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) M(i, j) = a.at(i, j);
+  if (!M.allFinite()) throw py::value_error(std::string(what) + ": the pose has a non-finite entry");
+  const Eigen::Matrix3d R = M.topLeftCorner<3, 3>();
+  // A rotation to double rounding (1e-6: poses that went through float32 still pass).
+  if ((R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() > 1e-6 || R.determinant() < 0 ||
+      M.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
+    throw py::value_error(std::string(what) + ": not a rigid transform (the top-left 3 x 3 must be a rotation, "
+                          "the last row 0 0 0 1)");
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.matrix() = M;
+  return T;
+}
 
-  py::class_<PyMap>(m, "Map")
+void bindTypes(py::module_& m) {
+  py::class_<PyMap>(m, "Map", "An elevation map: read-only numpy views of its rasters (docs/python.md)")
       .def_property_readonly("elevation", [](py::object self) { return view(self.cast<PyMap&>().map->elevation(), self); })
       .def_property_readonly("sigma", [](py::object self) { return view(self.cast<PyMap&>().map->sigma(), self); })
       .def_property_readonly("state", [](py::object self) { return view(self.cast<PyMap&>().map->state(), self); })
@@ -107,14 +110,64 @@ PYBIND11_MODULE(ambler, m) {
       .def_property_readonly("cell_m", [](const PyMap& p) { return p.map->grid().cell; })
       .def_property_readonly("x_min_m", [](const PyMap& p) { return p.map->grid().x_min; })
       .def_property_readonly("y_max_m", [](const PyMap& p) { return p.map->grid().y_max; })
-      .def_property_readonly("transform", [](const PyMap& p) {
-        // T_WM, the map frame in the world: a 4 × 4 (row 0 of the rasters at y_max, column 0 at x_min).
-        const Eigen::Matrix4d T = p.map->grid().T_WM.matrix();
-        py::array_t<double> a({4, 4});
-        for (int i = 0; i < 4; ++i)
-          for (int j = 0; j < 4; ++j) a.mutable_at(i, j) = T(i, j);
+      // T_WM, the map frame in the world (row 0 of the rasters at y_max, column 0 at x_min).
+      .def_property_readonly("transform", [](const PyMap& p) { return poseArray(p.map->grid().T_WM); });
+
+  py::class_<PyScan>(m, "Scan", "A range image as the rover has it, unwrapped, with its edges and sensor; "
+                                "without the pose it was taken from")
+      .def_property_readonly("range", [](py::object self) { return view(self.cast<PyScan&>().scan->image.range, self); })
+      .def_property_readonly("edges", [](py::object self) -> py::object {
+        const auto& e = self.cast<PyScan&>().scan->edges;
+        return e ? py::object(view(*e, self)) : py::object(py::none());
+      })
+      .def_property_readonly("phi", [](const PyScan& s) { return py::array(py::cast(s.scan->image.phi)); })
+      .def_property_readonly("theta", [](const PyScan& s) { return py::array(py::cast(s.scan->image.theta)); })
+      .def_property_readonly("points", [](const PyScan& s) {
+        // The returns in the sensor frame (eq. 1), row by row: an N × 3 copy.
+        const perception::RangeImage& im = s.scan->image;
+        py::array_t<double> a({py::ssize_t(im.validCount()), py::ssize_t(3)});
+        py::ssize_t n = 0;
+        for (int r = 0; r < im.rows(); ++r)
+          for (int c = 0; c < im.cols(); ++c)
+            if (im.valid(r, c)) {
+              const Eigen::Vector3d p = im.pointSensor(r, c);
+              for (int k = 0; k < 3; ++k) a.mutable_at(n, k) = p[k];
+              ++n;
+            }
+        return a;
+      })
+      .def_property_readonly("sensor_sigma_m", [](const PyScan& s) {
+        // σ of each return's range as the noise model has it (NaN where nothing returned).
+        const perception::RangeImage& im = s.scan->image;
+        py::array_t<float> a({im.rows(), im.cols()});
+        for (int r = 0; r < im.rows(); ++r)
+          for (int c = 0; c < im.cols(); ++c)
+            a.mutable_at(r, c) = im.valid(r, c) ? float(s.scan->sensor.rangeSigma(im.range(r, c))) : NAN;
         return a;
       });
+
+  py::class_<PyView>(m, "View", "A scan and the locus map made from it at its sensor pose")
+      .def_property_readonly("scan", [](const PyView& v) { return PyScan{v.scan}; })
+      .def_property_readonly("map", [](const PyView& v) { return PyMap{v.scan, &v.scan->map}; })
+      .def_property_readonly("sensor_pose", [](const PyView& v) { return poseArray(v.scan->image.T_WS); });
+}
+
+}  // namespace ambler::python
+
+PYBIND11_MODULE(ambler, m) {
+  using namespace ambler::python;
+  using namespace ambler::eval;
+  m.doc() = "ambler: the planetary-rover terrain-mapping testbed from Python (docs/python.md)";
+  py::register_exception<ScenarioError>(m, "ScenarioError", PyExc_ValueError);
+  py::register_exception<SweepError>(m, "OverrideError", PyExc_ValueError);
+  bindTypes(m);
+  bindRegistration(m);
+  bindStages(m);
+
+  py::class_<PyScenario>(m, "Scenario")
+      .def_property_readonly("name", [](const PyScenario& s) { return s.scenario.name; })
+      .def_property_readonly("seed", [](const PyScenario& s) { return s.scenario.seed; })
+      .def_property_readonly("file", [](const PyScenario& s) { return s.scenario.file.string(); });
 
   py::class_<PyRun, std::shared_ptr<PyRun>>(m, "Run")
       .def_property_readonly("out", [](const PyRun& r) { return r.out.string(); })
