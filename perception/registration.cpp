@@ -1,5 +1,6 @@
 #include "perception/registration.hpp"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -38,6 +39,13 @@ Matrix6d sensorPoseJacobian(const PoseVector& nu, const Eigen::Isometry3d& belie
 Matrix6d sensorPoseCovariance(const PoseVector& nu, const Matrix6d& P, const Eigen::Isometry3d& believed_WS_j) {
   const Matrix6d A = sensorPoseJacobian(nu, believed_WS_j);
   return A * P * A.transpose();
+}
+
+Matrix6d nuCovariance(const PoseVector& nu, const Matrix6d& C, const Eigen::Isometry3d& believed_WS_j) {
+  const Eigen::FullPivLU<Matrix6d> lu(sensorPoseJacobian(nu, believed_WS_j));
+  if (!lu.isInvertible()) throw std::invalid_argument("nuCovariance: the pose's Jacobian in nu is singular");
+  const Matrix6d A_inv = lu.inverse();
+  return A_inv * C * A_inv.transpose();
 }
 
 MapGrid believedGrid(const MapGrid& grid_i, const Eigen::Isometry3d& T_WS_i, const Eigen::Isometry3d& believed_WS_j) {

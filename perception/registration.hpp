@@ -127,6 +127,9 @@ Verification verifyHypotheses(const ElevationMap& map_i, const LocusMapper& imag
 // about sensor J: a yaw error moves them differently (docs/matching.md, "Calibration"). NEES is
 // the same in either (first order: an invertible linear map).
 Matrix6d sensorPoseCovariance(const PoseVector& nu, const Matrix6d& P, const Eigen::Isometry3d& believed_WS_j);
+// The inverse: ν's covariance A⁻¹·C·A⁻ᵀ from a covariance C of sensor J's pose (a method that
+// reports the pose's, as a user's own method does). Throws std::invalid_argument when A is singular.
+Matrix6d nuCovariance(const PoseVector& nu, const Matrix6d& C, const Eigen::Isometry3d& believed_WS_j);
 // A (as above): how an error δ of ν moves the estimated pose of sensor J.
 Matrix6d sensorPoseJacobian(const PoseVector& nu, const Eigen::Isometry3d& believed_WS_j);
 

@@ -19,6 +19,7 @@
 #include "base/temp_dir.hpp"
 #include "python/bindings.hpp"
 #include "eval/run/runner.hpp"
+#include "eval/tools/report/report.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "eval/tools/sweep/sweep.hpp"
 
@@ -55,7 +56,8 @@ struct PyRun {
   py::object metrics;
 };
 
-std::shared_ptr<PyRun> run(const PyScenario& sc, const std::optional<fs::path>& out) {
+std::shared_ptr<PyRun> run(const PyScenario& sc, const std::optional<fs::path>& out,
+                           const std::optional<py::dict>& custom) {
   auto r = std::make_shared<PyRun>();
   if (out) {
     r->out = *out;
@@ -65,6 +67,7 @@ std::shared_ptr<PyRun> run(const PyScenario& sc, const std::optional<fs::path>& 
   RunOptions opt;
   opt.out = r->out;
   opt.progress = false;
+  opt.custom = customMethodsFrom(custom);
   {
     py::gil_scoped_release release;
     r->products = std::make_shared<RunProducts>(eval::runScenarioKeeping(sc.scenario, opt));
@@ -187,6 +190,13 @@ PYBIND11_MODULE(ambler, m) {
   m.def("load_scenario", &loadScenarioWith, py::arg("path"),
         "The scenario in PATH; keyword overrides set keys as in the YAML, dotted for nesting "
         "(load_scenario(p, seed=3, **{'map.cell_m': 0.05})).");
-  m.def("run", &run, py::arg("scenario"), py::arg("out") = py::none(),
-        "Runs the scenario into OUT (a temporary directory, removed with the Run, when None).");
+  m.def("report", [](const fs::path& dir, const std::optional<fs::path>& out) {
+          py::gil_scoped_release release;
+          return ambler::eval::writeReport(dir, out ? *out : dir / "report.html").string();
+        }, py::arg("dir"), py::arg("out") = py::none(),
+        "`ambler report`: the HTML report of a run, sweep or basin directory, to OUT (DIR/report.html). "
+        "Returns its path.");
+  m.def("run", &run, py::arg("scenario"), py::arg("out") = py::none(), py::arg("custom") = py::none(),
+        "Runs the scenario into OUT (a temporary directory, removed with the Run, when None); CUSTOM maps a "
+        "name to a registration method of your own, fn(map_i, scan_j, T_initial), run on every pair.");
 }

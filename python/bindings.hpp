@@ -9,7 +9,9 @@
 
 #include <Eigen/Geometry>
 #include <memory>
+#include <optional>
 
+#include "eval/run/pair_registration.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "perception/elevation_map.hpp"
 #include "perception/raster.hpp"
@@ -58,6 +60,10 @@ struct PyView {
   std::shared_ptr<const perception::ScanMap> scan;
   std::shared_ptr<const perception::RegistrationConfig> config;
 };
+
+// The user's own methods of a `custom` argument ({name: fn(map_i, scan_j, T_initial)}), as the
+// project runs them (registration.cpp). Throws ValueError for a bad name or a value not callable.
+eval::CustomMethods customMethodsFrom(const std::optional<py::dict>& custom);
 
 // Binds Map, Scan and View (ambler_module.cpp), the registration API (registration.cpp) and the
 // stages (stages.cpp).

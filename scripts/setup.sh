@@ -20,6 +20,7 @@ packages=(
   chromium                          # tests/eval/report_chromium.sh: the report as a browser renders it
   python3-dev pybind11-dev          # the Python module (python/, docs/python.md); optional to the build
   python3-numpy python3-pytest      # its arrays and its tests
+  python3-open3d                    # examples/python/basin_open3d.py: Open3D-Python as a user's own method
 )
 missing=()
 for p in "${packages[@]}"; do

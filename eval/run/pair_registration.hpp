@@ -5,7 +5,9 @@
 // each in its view's believed frame. Every method starts from the same T_0 and is scored the same
 // way against the true relative pose.
 #include <Eigen/Geometry>
+#include <functional>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "eval/scenario/scenario.hpp"
@@ -25,7 +27,41 @@ struct PairResult {
   perception::RegistrationResult reg;
   perception::PoseError error, start;  // of T_est and of T_0 against the truth
   double seconds = 0;                  // wall time of the registration alone
+  // A user's own method's covariance of sensor J's pose (the pair JSON's covariance_pose), when it
+  // gives one; the paper's methods give ν's, in reg.iconic.
+  std::optional<perception::Matrix6d> covariance_pose;
 };
+
+class PairRegistration;
+
+// What a user's own method (CustomMethod) returns: its estimate of sensor J in sensor I's frame,
+// optionally a covariance of it (6 × 6, the error e of T·exp(e), rx ry rz tx ty tz in sensor J's
+// frame: the pair JSON's covariance_pose) and its iteration count. `registered`: when the method
+// returned a built-in registration of this very pair (the Python module's ambler.register), that
+// result whole, so it is scored with its own verdict as the built-in method is.
+struct CustomEstimate {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  std::optional<perception::Matrix6d> covariance_pose;
+  int iterations = 0;
+  std::optional<PairResult> registered;
+};
+
+// A registration method from outside the project (docs/python.md, "Your own method"): from the
+// pair (view I mapped at its pose, scan J; PairRegistration::viewI, scanJ) and the believed
+// relative pose T_0, an estimate. Scored as a peer is: its error against the truth, and the
+// rover's verdict by the tests that need nothing of the method's internals (the lines' residuals
+// and overlap at the estimate, the correction under the prior, and a given covariance positive
+// definite). May throw std::invalid_argument to give up (counted as a failure, as a built-in
+// method's), anything else to stop the run.
+struct CustomMethod {
+  std::string name;  // not a built-in method's; letters, digits, '_', '-', '+' and '.'
+  std::function<CustomEstimate(const PairRegistration& pair, const Eigen::Isometry3d& T_0)> fn;
+};
+using CustomMethods = std::vector<CustomMethod>;
+
+// Throws std::invalid_argument naming `where` and the method for a name that is empty, has other
+// characters, is a built-in method's, or is repeated, and for a method without a function.
+void checkCustomMethods(const CustomMethods& methods, const std::string& where);
 
 class PairRegistration {
  public:
@@ -42,10 +78,20 @@ class PairRegistration {
   // The truth: sensor J in sensor I's frame.
   const Eigen::Isometry3d& trueRelative() const { return T_IJ_; }
   const perception::RegistrationConfig& config() const { return config_; }
+  // What a user's own method is given: view I (its scan, and its map at `poseI()`, the world
+  // frame) and scan J (image.T_WS is its true pose: a method must not read it).
+  const perception::ScanMap& viewI() const { return i_; }
+  const Eigen::Isometry3d& poseI() const { return T_WS_i_; }
+  const perception::ScanMap& scanJ() const { return j_; }
 
   // Registers view J from the believed relative pose T_0 by `method`. Thread-safe: concurrent
   // calls share only read-only state. Deterministic.
   PairResult run(MatchMethod method, const Eigen::Isometry3d& T_0) const;
+  // The same by a user's own method: its estimate scored against the truth and judged by the
+  // rover (CustomMethod). Thread-safe when `method.fn` is. A `registered` result is scored with
+  // its own verdict only when it started from this pair's believed pose (T_0); otherwise its T
+  // is judged as any estimate.
+  PairResult run(const CustomMethod& method, const Eigen::Isometry3d& T_0) const;
 
  private:
   // Sensor J in sensor I's frame by a registration's corrected pose.

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "eval/geo/geotiff.hpp"
+#include "eval/run/pair_registration.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "perception/elevation_map.hpp"
 #include "perception/registration.hpp"
@@ -53,6 +54,7 @@ struct RunState {
   const Scenario& scenario;
   std::filesystem::path out;
   bool progress = true;
+  const CustomMethods* custom = nullptr;  // a user's own registration methods (RunOptions::custom)
 
   std::optional<sim::World> world;  // world stage
   GeoFrame geo;                     // world stage: the CRS of map rasters (a DEM's, or a local frame)

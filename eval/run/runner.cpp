@@ -15,7 +15,9 @@ nlohmann::ordered_json runScenario(const Scenario& sc, const RunOptions& opt) {
 
 RunProducts runScenarioKeeping(const Scenario& sc, const RunOptions& opt) {
   base::Stopwatch total;
+  checkCustomMethods(opt.custom, sc.file.empty() ? sc.name : sc.file.string());
   RunState state{sc, opt.out, opt.progress};
+  state.custom = &opt.custom;
   // No directory yet: the world stage makes it once the views are checked against the terrain,
   // so a refused scenario leaves nothing behind.
   state.metrics["name"] = sc.name;

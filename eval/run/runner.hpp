@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "eval/run/pair_registration.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "perception/elevation_map.hpp"
 #include "perception/range_image.hpp"
@@ -18,6 +19,9 @@ namespace ambler::eval {
 struct RunOptions {
   std::filesystem::path out;
   bool progress = true;  // one line per stage on stderr
+  // A user's own registration methods (the Python module's `custom`): the match stage runs them
+  // after the scenario's on every pair and scores them alike; the merge does not use them.
+  CustomMethods custom;
 };
 
 // Runs the scenario and returns the metrics it also writes to out/metrics.json.

@@ -534,6 +534,21 @@ perception::MapGrid MergeSpec::grid() const {
 }
 const char* shadowsName(perception::ShadowMethod m) { return m == perception::ShadowMethod::Gnc ? "gnc" : "none"; }
 const char* baselineName(Baseline b) { return b == Baseline::Cartesian ? "cartesian" : "none"; }
+const std::vector<MatchMethod>& matchMethods() {
+  static const std::vector<MatchMethod> kNamed{
+      MatchMethod::Iconic,          MatchMethod::IconicLm, MatchMethod::Features,     MatchMethod::FeaturesIconic,
+      MatchMethod::IconicWeighted,  MatchMethod::FeaturesLm, MatchMethod::IcpPointToPlane, MatchMethod::Gicp,
+      MatchMethod::Fgr,             MatchMethod::IconicRobust, MatchMethod::FeaturesIconicRobust,
+      MatchMethod::FeaturesIconicWeighted};
+  return kNamed;
+}
+
+std::optional<MatchMethod> matchMethodFromName(std::string_view name) {
+  for (const MatchMethod m : matchMethods())
+    if (name == matchMethodName(m)) return m;
+  return std::nullopt;
+}
+
 const char* matchMethodName(MatchMethod m) {
   switch (m) {
     case MatchMethod::Features: return "features";

@@ -74,6 +74,9 @@ std::optional<perception::RegistrationMethod> paperMethod(MatchMethod m);
 // The scenario's name of a method ("features+iconic"; in file names, eval/pictures/match_figures.hpp's
 // methodFileName).
 const char* matchMethodName(MatchMethod m);
+// Every method, in the order a refusal lists their names; and a name back to its method.
+const std::vector<MatchMethod>& matchMethods();
+std::optional<MatchMethod> matchMethodFromName(std::string_view name);
 // Whether the method's covariance is calibrated (its mean NEES within [4.5, 7.5] across three
 // terrain kinds, tests/integration/test_matching_calibration.cpp; docs/matching.md,
 // "Calibration"): iconic_weighted's, and only with a sensor that does not quantise its ranges (the

@@ -109,16 +109,9 @@ std::optional<double> toDouble(std::string_view text) {
 }
 
 MatchMethod readMatchMethod(const Reader& reader, const YAML::Node& node, const std::string& path) {
-  // The names as matchMethodName spells them, in the order the refusal lists them.
-  static constexpr MatchMethod kNamed[] = {
-      MatchMethod::Iconic,          MatchMethod::IconicLm, MatchMethod::Features,     MatchMethod::FeaturesIconic,
-      MatchMethod::IconicWeighted,  MatchMethod::FeaturesLm, MatchMethod::IcpPointToPlane, MatchMethod::Gicp,
-      MatchMethod::Fgr,             MatchMethod::IconicRobust, MatchMethod::FeaturesIconicRobust,
-      MatchMethod::FeaturesIconicWeighted};
   std::vector<std::string_view> names;
-  for (const MatchMethod k : kNamed) names.emplace_back(matchMethodName(k));
-  const std::string_view name = reader.choice(node, path, names);
-  return kNamed[std::find(names.begin(), names.end(), name) - names.begin()];
+  for (const MatchMethod k : matchMethods()) names.emplace_back(matchMethodName(k));
+  return *matchMethodFromName(reader.choice(node, path, names));
 }
 
 bool isQuoted(const YAML::Node& node) { return node.Tag() == "!"; }

@@ -160,7 +160,8 @@ nlohmann::ordered_json toJson(const PairRecord& r) {
   pair["free_directions"] = res.free_directions;
   pair["overlap"] = res.overlap;
   // The same of sensor J's pose in its own frame (what is scored), rx ry rz tx ty tz.
-  pair["covariance_pose"] = covariance && res.covariance.allFinite()
+  pair["covariance_pose"] = r.covariance_pose ? matrixJson(*r.covariance_pose)
+                            : covariance && res.covariance.allFinite()
                                 ? matrixJson(perception::sensorPoseCovariance(reg.nu, res.covariance, r.believed_WS))
                                 : nlohmann::ordered_json(nullptr);
   pair["covariance_calibrated"] = covariance && r.covariance_calibrated;

@@ -5,6 +5,7 @@
 // not a success, a false reject a success refused.
 #include <Eigen/Geometry>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "eval/scenario/scenario.hpp"
@@ -54,6 +55,9 @@ struct PairRecord {
   perception::MapGrid grid_j;            // map J's grid (perception::believedGrid)
   perception::FeatureMatchConfig match;  // the feature stage's: D_true_m is eq. 3 under it
   bool covariance_calibrated = false;    // the method's covariance is calibrated for the sensor
+  // A user's own method's covariance of sensor J's pose, written as covariance_pose as it is
+  // (the paper's methods' is computed from ν's).
+  std::optional<perception::Matrix6d> covariance_pose;
 };
 
 // The pair JSON: pair, method, T_true, T_initial, T_estimated (4 × 4 rows), translation_error_m,

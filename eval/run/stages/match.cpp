@@ -108,18 +108,24 @@ void run(RunState& s) {
     // are scored and written in the scenario's order: the same files as one after another. Each
     // method's time_s is its own wall time, longer where it shared the cores; the stage's time is
     // the wall time of them all.
-    std::vector<PairResult> results(spec.methods.size());
+    // A user's own methods (RunOptions::custom) then run one after another, in the caller's order.
+    const CustomMethods none;
+    const CustomMethods& custom = s.custom ? *s.custom : none;
+    std::vector<PairResult> results(spec.methods.size() + custom.size());
     base::Stopwatch wall;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, results.size(), 1),
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, spec.methods.size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                         for (std::size_t k = range.begin(); k != range.end(); ++k)
                           results[k] = pair_reg.run(spec.methods[k], T_0);
                       },
                       tbb::simple_partitioner());
+    for (std::size_t k = 0; k < custom.size(); ++k) results[spec.methods.size() + k] = pair_reg.run(custom[k], T_0);
     s.addTime("match", wall.seconds());
     std::vector<Registered> registered;
     for (std::size_t k = 0; k < results.size(); ++k) {
-      const MatchMethod method = spec.methods[k];
+      // The method: built-in, or a user's (no MatchMethod; its covariance is not calibrated).
+      const bool builtin = k < spec.methods.size();
+      const MatchMethod method = builtin ? spec.methods[k] : MatchMethod{};
       const PairResult& result = results[k];
       const perception::RegistrationResult& reg = result.reg;
       const perception::IconicResult& res = reg.iconic;
@@ -127,7 +133,7 @@ void run(RunState& s) {
       const Eigen::Isometry3d& T_est = result.T_est;
       const perception::PoseError err = result.error, start = result.start;
       const bool success = isSuccess(err, spec);
-      const std::string name = matchMethodName(method);
+      const std::string name = builtin ? matchMethodName(method) : custom[k - spec.methods.size()].name;
       const perception::Assessment& a = reg.assessment;
       const RegistrationScore score{i, j, name, err, start, success, a, reg.iterations, seconds};
       PairRecord record;
@@ -137,19 +143,22 @@ void run(RunState& s) {
       record.believed_WS = believed_WS, record.T_WS_i = vi.T_WS, record.T_WS_j = vj.T_WS;
       record.grid_j = grid_j;
       record.match = config.match;
-      record.covariance_calibrated = covarianceCalibrated(method, sc.sensor);
+      record.covariance_calibrated = builtin && covarianceCalibrated(method, sc.sensor);
+      record.covariance_pose = result.covariance_pose;
       if (reg.feature_match) writeCorrespondencePicture(s, i, j, name, reg);
       const std::string stem = "pair_" + std::to_string(i) + "_" + std::to_string(j) + "_" + methodFileName(name);
       writeJson(s.out / "matching" / (stem + ".json"), toJson(record));
       registered.push_back({name, reg.corrected_WS, res.rms_m});
-      const bool covariance = reg.ran_iconic && !res.degenerate;  // ν has a covariance (the pair JSON's)
-      PairEstimate estimate{i, j, method, T_est, reg.nu, std::nullopt};
-      if (covariance && res.covariance.allFinite()) estimate.covariance = res.covariance;
-      estimate.covariance_calibrated = covarianceCalibrated(method, sc.sensor);
-      estimate.accepted = a.accepted;
-      estimate.T_WS_i = vi.T_WS;
-      estimate.believed_WS_j = believed_WS;
-      s.estimates.push_back(estimate);
+      if (builtin) {  // the merge places views by the built-in methods' estimates only
+        const bool covariance = reg.ran_iconic && !res.degenerate;  // ν has a covariance (the pair JSON's)
+        PairEstimate estimate{i, j, method, T_est, reg.nu, std::nullopt};
+        if (covariance && res.covariance.allFinite()) estimate.covariance = res.covariance;
+        estimate.covariance_calibrated = covarianceCalibrated(method, sc.sensor);
+        estimate.accepted = a.accepted;
+        estimate.T_WS_i = vi.T_WS;
+        estimate.believed_WS_j = believed_WS;
+        s.estimates.push_back(estimate);
+      }
       s.metrics["registration"].push_back(toJson(score));
       char line[240];
       std::snprintf(line, sizeof line, "match     views %d-%d %-18s %3d iterations: error %.4f m %.3f deg (from %.3f m %.2f deg)%s%s",

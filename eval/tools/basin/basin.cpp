@@ -58,8 +58,21 @@ Draw draw(const BasinGrid& g, std::size_t u) {
   return {u / per_t, (u % per_t) / trials, int(u % trials)};
 }
 
+// The methods' names: the scenario's, then the user's own.
+std::vector<std::string> methodNames(const Scenario& sc, const BasinOptions& opt) {
+  std::vector<std::string> names;
+  for (const MatchMethod m : sc.matching->methods) names.emplace_back(matchMethodName(m));
+  for (const CustomMethod& m : opt.custom) names.push_back(m.name);
+  return names;
+}
+
 void validate(const Scenario& sc, const BasinOptions& opt) {
   const std::string file = sc.file.empty() ? sc.name : sc.file.string();
+  try {
+    checkCustomMethods(opt.custom, "basin");
+  } catch (const std::invalid_argument& e) {
+    throw BasinError(e.what());
+  }
   if (sc.traverse) throw BasinError(file + ": traverse: not yet supported by ambler basin (it registers one pair of views)");
   if (!sc.matching) throw BasinError(file + ": matching: a basin registers the scenario's pair by its matching methods; "
                                             "the scenario has no matching section");
@@ -105,7 +118,9 @@ std::string journalIdentity(const Scenario& sc, const BasinOptions& opt) {
   text += "\nrotation_deg=";
   for (const double r : opt.grid.rotation_deg) text += csvNumber(r) + ",";
   text += "\ntrials=" + std::to_string(opt.grid.trials) + "\nvertical=" + (opt.grid.vertical_axis ? "1" : "0") +
-          "\n" + resolvedYaml(sc);
+          "\ncustom=";
+  for (const CustomMethod& m : opt.custom) text += m.name + ",";
+  text += "\n" + resolvedYaml(sc);
   return base::digest(text);
 }
 
@@ -194,15 +209,16 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
   const BasinGrid& g = opt.grid;
   const MatchingSpec& spec = *sc.matching;
   const std::size_t cells = g.translation_m.size() * g.rotation_deg.size();
+  const std::vector<std::string> names = methodNames(sc, opt);
   std::map<std::string, std::size_t> method_index;
-  for (std::size_t m = 0; m < spec.methods.size(); ++m) method_index[matchMethodName(spec.methods[m])] = m;
+  for (std::size_t m = 0; m < names.size(); ++m) method_index[names[m]] = m;
   Tally t;
-  t.ok.assign(spec.methods.size(), std::vector<int>(cells, 0));
+  t.ok.assign(names.size(), std::vector<int>(cells, 0));
   t.n = t.ok;
   t.accepted = t.ok;
   t.false_accept = t.ok;
-  t.err.assign(spec.methods.size(), std::vector<std::vector<double>>(cells));
-  t.ok_err.assign(spec.methods.size(), {});
+  t.err.assign(names.size(), std::vector<std::vector<double>>(cells));
+  t.ok_err.assign(names.size(), {});
   std::map<std::string, std::size_t> t_index, r_index;
   for (std::size_t i = 0; i < g.translation_m.size(); ++i) t_index[csvNumber(g.translation_m[i])] = i;
   for (std::size_t i = 0; i < g.rotation_deg.size(); ++i) r_index[csvNumber(g.rotation_deg[i])] = i;
@@ -224,9 +240,9 @@ void writeFigures(const Scenario& sc, const BasinOptions& opt, const std::vector
                                 csvNumber(spec.success_rotation_deg) + " deg; " + std::to_string(g.trials) +
                                 " trials per cell";
   std::vector<BasinBoundary> boundaries;
-  for (std::size_t m = 0; m < spec.methods.size(); ++m) {
+  for (std::size_t m = 0; m < names.size(); ++m) {
     SuccessGrid h;
-    const std::string name = matchMethodName(spec.methods[m]);
+    const std::string& name = names[m];
     h.title = sc.name + ": " + name;
     h.subtitle = criterion + "\nin a cell: successes/trials; median error; acc: accepted; FA: false accepts";
     h.row_axis = "initial translation";
@@ -333,6 +349,7 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   const MatchingSpec& spec = *sc.matching;
   const auto [pi, pj] = spec.pairs.front();
   const std::vector<std::size_t> todo = shardItems(drawCount(g), opt.shard);
+  const std::vector<std::string> names = methodNames(sc, opt);
   // With --resume, what an earlier attempt recorded, checked before anything runs or is written.
   const fs::path journal_file =
       opt.out / (opt.shard ? shardName(*opt.shard, "basin", ".journal") : "basin.journal");
@@ -343,7 +360,7 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
   const std::vector<std::size_t> pending =  // indices into todo
       unrecordedItems(done, todo, journal_file, "draws", opt.shard ? "shard" : "basin",
                       [&](std::size_t i, const std::string& payload) {
-                        rows[i] = rowsFromPayload(payload, journal_file, todo[i], spec.methods.size());
+                        rows[i] = rowsFromPayload(payload, journal_file, todo[i], names.size());
                       });
   say("basin " + sc.name + ": views " + std::to_string(pi) + "-" + std::to_string(pj) + ", " +
       std::to_string(g.translation_m.size()) + " translations x " + std::to_string(g.rotation_deg.size()) +
@@ -351,7 +368,7 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
       std::to_string(drawCount(g)) + " draws" +
       (opt.shard ? " (shard " + std::to_string(opt.shard->index) + " of " + std::to_string(opt.shard->count) + ")"
                  : std::string()) +
-      " x " + std::to_string(spec.methods.size()) + " methods -> " + opt.out.string());
+      " x " + std::to_string(names.size()) + " methods -> " + opt.out.string());
 
   // The pair: the ordinary stages, into out/pair/ (the world stage makes the directories once
   // the views are checked against the terrain).
@@ -380,26 +397,29 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
     const double t_m = g.translation_m[d.t], r_deg = g.rotation_deg[d.r];
     const Eigen::Isometry3d T_0 = pair.trueRelative() * basinError(sc.seed, d.trial, t_m, r_deg, vj.T_WS, g.vertical_axis);
     std::string verdicts;
-    for (const MatchMethod m : spec.methods) {
-      std::vector<std::string> row{matchMethodName(m), csvNumber(t_m), csvNumber(r_deg), std::to_string(d.trial)};
+    // One row per method, built-in or the user's, in the order of `names`.
+    const auto score = [&](const std::string& name, const auto& method) {
+      std::vector<std::string> row{name, csvNumber(t_m), csvNumber(r_deg), std::to_string(d.trial)};
       try {
-        const PairResult res = pair.run(m, T_0);
+        const PairResult res = pair.run(method, T_0);
         const bool ok = isSuccess(res.error, spec);
         row.insert(row.end(), {csvNumber(res.error.translation_m), csvNumber(res.error.rotation_deg),
                                ok ? "true" : "false", std::to_string(res.reg.iterations),
                                opt.timing ? csvNumber(res.seconds) : "",
                                res.reg.assessment.accepted ? "true" : "false",
                                res.reg.assessment.accepted && !ok ? "true" : "false"});
-        verdicts += std::string(" ") + matchMethodName(m) + (ok ? " ok" : " FAILED");
+        verdicts += " " + name + (ok ? " ok" : " FAILED");
       } catch (const std::invalid_argument& e) {
         // A method that gives up (no overlap left, too few points) has not converged.
         row.insert(row.end(), {"", "", "false", "0", "", "false", "false"});
-        verdicts += std::string(" ") + matchMethodName(m) + " GAVE UP";
+        verdicts += " " + name + " GAVE UP";
         const std::lock_guard lock(mutex);
-        if (first_failure.empty()) first_failure = matchMethodName(m) + std::string(": ") + e.what();
+        if (first_failure.empty()) first_failure = name + ": " + e.what();
       }
       rows[i].push_back(std::move(row));
-    }
+    };
+    for (const MatchMethod m : spec.methods) score(matchMethodName(m), m);
+    for (const CustomMethod& m : opt.custom) score(m.name, m);
     return JobRecord{rowsPayload(rows[i]),
                      csvNumber(t_m) + " m " + csvNumber(r_deg) + " deg trial " + std::to_string(d.trial) + ":" + verdicts};
   });
@@ -408,7 +428,7 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
     throw BasinError(opt.out.string() + ": draw " + std::to_string(failure->item) + ": " + failure->message);
   if (!first_failure.empty()) say("basin: a method gave up (counted as a failure), e.g. " + first_failure);
 
-  const std::vector<std::vector<std::string>> records = byMethod(rows, spec.methods.size());
+  const std::vector<std::vector<std::string>> records = byMethod(rows, names.size());
   std::string text;
   for (const auto& record : records) text += csvLine(record);
   const fs::path csv = opt.out / (opt.shard ? shardName(*opt.shard, "basin") : "basin.csv");
@@ -422,11 +442,11 @@ fs::path runBasin(const Scenario& scenario, const BasinOptions& opt) {
 fs::path mergeBasin(const Scenario& scenario, const BasinOptions& opt) {
   validate(scenario, opt);
   const BasinGrid& g = opt.grid;
-  const MatchingSpec& spec = *scenario.matching;
   const auto files = shardFiles(opt.out, "basin");
-  const std::size_t draws = drawCount(g), methods = spec.methods.size();
+  const std::vector<std::string> names = methodNames(scenario, opt);
+  const std::size_t draws = drawCount(g), methods = names.size();
   std::map<std::string, std::size_t> method_index, t_index, r_index;
-  for (std::size_t m = 0; m < methods; ++m) method_index[matchMethodName(spec.methods[m])] = m;
+  for (std::size_t m = 0; m < methods; ++m) method_index[names[m]] = m;
   for (std::size_t i = 0; i < g.translation_m.size(); ++i) t_index[csvNumber(g.translation_m[i])] = i;
   for (std::size_t i = 0; i < g.rotation_deg.size(); ++i) r_index[csvNumber(g.rotation_deg[i])] = i;
   std::vector<std::optional<std::vector<std::string>>> rows(methods * draws);
@@ -467,7 +487,7 @@ fs::path mergeBasin(const Scenario& scenario, const BasinOptions& opt) {
   for (std::size_t k = 0; k < rows.size(); ++k) {
     if (!rows[k]) {
       const Draw d = draw(g, k % draws);
-      throw BasinError(opt.out.string() + ": no row of " + matchMethodName(spec.methods[k / draws]) + " at " +
+      throw BasinError(opt.out.string() + ": no row of " + names[k / draws] + " at " +
                        csvNumber(g.translation_m[d.t]) + " m, " + csvNumber(g.rotation_deg[d.r]) + " deg, trial " +
                        std::to_string(d.trial) + " in the shards");
     }

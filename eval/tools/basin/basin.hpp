@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 
+#include "eval/run/pair_registration.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "eval/tools/sweep/sweep.hpp"
 
@@ -43,6 +44,10 @@ struct BasinOptions {
   bool timing = false;         // fill time_s (rows then differ from run to run); empty otherwise
   bool progress = true;        // a progress bar on a terminal, progress lines otherwise
   bool resume = false;         // keep the draws the journal records as finished; register only the rest
+  // A user's own methods (the Python module's ambler.basin), after the scenario's, scored alike.
+  // The journal knows them by name only: resuming with another function under the same name
+  // keeps the first one's rows.
+  CustomMethods custom;
 };
 
 // The initial error of trial `trial` at magnitudes (t, r): E = (R, t·h) in sensor J's frame, h

@@ -75,11 +75,12 @@ void requireAxes(const Sweep& s, std::initializer_list<const char*> keys) {
       throw SweepError(s.file.string() + ": axes: the experiment's report needs an axis " + key);
 }
 
-fs::path runExperimentSweep(const Sweep& sweep, const fs::path& dir, int jobs, bool progress) {
+fs::path runExperimentSweep(const Sweep& sweep, const fs::path& dir, const ExperimentOptions& opt) {
   SweepOptions so;
   so.out = dir;
-  so.jobs = jobs;
-  so.progress = progress;
+  so.custom = opt.custom;
+  so.jobs = opt.jobs;
+  so.progress = opt.progress;
   return runSweep(sweep, so);
 }
 
@@ -107,7 +108,7 @@ std::string runSweepsAndReport(const std::vector<Sweep>& sweeps, const std::vect
   const auto start = std::chrono::steady_clock::now();
   std::size_t runs = 0;
   for (std::size_t i = 0; i < sweeps.size(); ++i) {
-    runExperimentSweep(sweeps[i], opt.out / dirs.at(i), opt.jobs, opt.progress);
+    runExperimentSweep(sweeps[i], opt.out / dirs.at(i), opt);
     runs += sweeps[i].runs.size();
   }
   const std::string md = report();
@@ -568,8 +569,8 @@ std::string runLocusVsCartesian(const ExperimentOptions& opt) {
   require(tilt, {"terrain.slope_deg", "sensor", "seed"});
   require(res, {"map.cell_m", "seed"});
 
-  const Results tilt_results(tilt, runExperimentSweep(tilt, opt.out / "tilt_noise", opt.jobs, opt.progress));
-  const Results res_results(res, runExperimentSweep(res, opt.out / "resolution", opt.jobs, opt.progress));
+  const Results tilt_results(tilt, runExperimentSweep(tilt, opt.out / "tilt_noise", opt));
+  const Results res_results(res, runExperimentSweep(res, opt.out / "resolution", opt));
 
   const std::string md = report(tilt_results, res_results, opt.quick);
   writeText(opt.out / "table.md", md);

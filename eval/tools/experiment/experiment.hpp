@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <string>
 
+#include "eval/run/pair_registration.hpp"
+
 namespace ambler::eval {
 
 struct ExperimentOptions {
@@ -18,6 +20,7 @@ struct ExperimentOptions {
   bool quick = false;    // the first and last value of every axis and the first seed only
   int jobs = 1;          // scenarios run at once (as `ambler sweep --jobs`)
   bool progress = true;  // the sweeps' progress lines on stderr
+  CustomMethods custom;  // a user's own registration methods, in every run's match stage (docs/python.md)
 };
 
 // Runs both sweeps into out/tilt_noise/ and out/resolution/ (results.csv and runs/<k>/), then

@@ -30,9 +30,9 @@ Sweep experimentSweep(const std::filesystem::path& file, bool quick);
 // Throws SweepError unless the sweep has an axis named by each of `keys`.
 void requireAxes(const Sweep& sweep, std::initializer_list<const char*> keys);
 
-// Runs the sweep into `dir` (results.csv and runs/<k>/) with the experiment's jobs and progress.
-std::filesystem::path runExperimentSweep(const Sweep& sweep, const std::filesystem::path& dir, int jobs,
-                                         bool progress);
+// Runs the sweep into `dir` (results.csv and runs/<k>/) with the experiment's jobs, progress and custom methods.
+std::filesystem::path runExperimentSweep(const Sweep& sweep, const std::filesystem::path& dir,
+                                         const ExperimentOptions& options);
 
 // The sweep files `files` of options.sweeps (each through experimentSweep: --quick reduces them),
 // each with a seed axis and every run `usable`; else SweepError naming the file and saying "the

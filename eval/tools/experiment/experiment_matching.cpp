@@ -274,7 +274,7 @@ std::string writeReport(const Sweep& sweep, const ExperimentOptions& opt) {
 std::string runMatching(const ExperimentOptions& opt) {
   const auto start = std::chrono::steady_clock::now();
   const Sweep sweep = basinSweep(opt);
-  runExperimentSweep(sweep, opt.out / "basin", opt.jobs, opt.progress);
+  runExperimentSweep(sweep, opt.out / "basin", opt);
   const std::string md = writeReport(sweep, opt);
   if (opt.progress) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

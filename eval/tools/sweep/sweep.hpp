@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "eval/run/pair_registration.hpp"
 #include "eval/scenario/scenario.hpp"
 #include "eval/tools/shards.hpp"
 
@@ -56,6 +57,7 @@ struct SweepOptions {
   bool timing = false;   // also the timing_s.* columns (then rows are not reproducible)
   bool progress = true;  // a progress bar on a terminal, one line per run otherwise
   bool resume = false;   // keep the runs the journal records as finished; run only the rest
+  CustomMethods custom;  // a user's own registration methods, in every run (RunOptions::custom)
 };
 
 // "none", "metrics" or "all". Throws SweepError naming --keep.

@@ -192,6 +192,8 @@ std::string journalIdentity(const Sweep& sweep, const SweepOptions& opt, const s
                      (opt.shard ? std::to_string(opt.shard->index) + "/" + std::to_string(opt.shard->count) : "") +
                      "\nmetrics=";
   for (const auto& m : sweep.metrics) text += m + ",";
+  text += "\ncustom=";  // the user's own methods, by name
+  for (const CustomMethod& m : opt.custom) text += m.name + ",";
   for (const std::size_t k : todo) text += "\nrun " + std::to_string(k) + "\n" + resolvedYaml(sweep.runs[k]);
   return base::digest(text);
 }
@@ -253,7 +255,7 @@ fs::path runSweep(const Sweep& sweep, const SweepOptions& opt) {
     const std::size_t k = todo[i];
     const fs::path dir = opt.out / "runs" / std::to_string(k);
     fs::remove_all(dir);  // no files of an earlier sweep (or a killed attempt) left beside this run's
-    const auto metrics = runScenario(sweep.runs[k], RunOptions{dir, false});
+    const auto metrics = runScenario(sweep.runs[k], RunOptions{dir, false, opt.custom});
     flatten(metrics, "", opt.timing, rows[i]);
     prune(dir, opt.keep);
     return JobRecord{rowPayload(rows[i]), progressLine(sweep, k, metrics)};

@@ -1,6 +1,6 @@
 // `ambler basin`: the draws' initial errors have the asked magnitudes exactly (horizontal
 // translation, rotation about a unit axis); on a noise-free terrain from zero initial error every
-// method that starts from T_0 succeeds in every trial; the basin sharded three ways merges into the unsharded CSV byte for byte; bad
+// method that starts from T_0 succeeds in every trial; the basin sharded three ways merges into the unsharded CSV byte for byte; bad a user's own method (CustomMethod) is scored as a built-in one;
 // grids and scenarios are refused in one line before anything is written.
 #include <gtest/gtest.h>
 
@@ -178,6 +178,74 @@ TEST(Basin, BadGridsAndScenariosAreRefusedBeforeAnythingIsWritten) {
   too_many.shard = Shard{1, 3};
   EXPECT_THROW(runBasin(sc, too_many), BasinError);
   EXPECT_FALSE(fs::exists(tmp.path() / "out"));
+}
+
+}  // namespace
+}  // namespace ambler::eval
+
+namespace ambler::eval {
+namespace {
+
+// A user's own method (CustomMethod; the Python module's `custom`), in C++: one that answers the
+// truth is a success with zero error and is accepted on noise-free terrain; one that answers T_0
+// keeps the draw's initial error exactly; one that hands back the built-in LM's registration of the
+// pair gives LM's rows but the name; a given covariance of the pose is checked against ν's.
+TEST(Basin, AUsersOwnMethodIsScoredAsABuiltInOne) {
+  TempDir tmp;
+  const Scenario sc = parseScenario(scenario("iconic_lm"), tmp.path() / "basin.yaml");
+  BasinOptions o = options(tmp.path() / "out", {0, 0.4}, {0, 4}, 2);
+  o.custom.push_back({"truth", [](const PairRegistration& pair, const Eigen::Isometry3d&) {
+                        return CustomEstimate{pair.trueRelative(), perception::Matrix6d::Identity() * 1e-6, 7, {}};
+                      }});
+  o.custom.push_back({"stay", [](const PairRegistration&, const Eigen::Isometry3d& T_0) {
+                        return CustomEstimate{T_0, std::nullopt, 0, {}};
+                      }});
+  o.custom.push_back({"lm", [](const PairRegistration& pair, const Eigen::Isometry3d& T_0) {
+                        const PairResult r = pair.run(MatchMethod::IconicLm, T_0);
+                        return CustomEstimate{r.T_est, std::nullopt, r.reg.iterations, r};
+                      }});
+  const auto records = parseResultsCsv(slurp(runBasin(sc, o)));
+  ASSERT_TRUE(records);
+  ASSERT_EQ(records->size(), 1u + 4u * 8u);
+  std::vector<std::vector<std::string>> lm, mine;
+  for (std::size_t k = 1; k < records->size(); ++k) {
+    const auto& row = (*records)[k];
+    if (row[0] == "truth") {
+      EXPECT_EQ(row[4], "0");
+      EXPECT_EQ(row[5], "0");
+      EXPECT_EQ(row[6], "true");
+      EXPECT_EQ(row[7], "7");
+      EXPECT_EQ(row[9], "true") << "at the truth on noise-free terrain the rover accepts";
+    } else if (row[0] == "stay") {
+      EXPECT_NEAR(std::stod(row[4]), std::stod(row[1]), 1e-9);
+      EXPECT_NEAR(std::stod(row[5]), std::stod(row[2]), 1e-9);
+      // 0.4 m from the truth: the lines disagree and the rover refuses.
+      if (row[1] == "0.4") EXPECT_EQ(row[9], "false");
+    }
+    if (row[0] == "iconic_lm") lm.emplace_back(row.begin() + 1, row.end());
+    if (row[0] == "lm") mine.emplace_back(row.begin() + 1, row.end());
+  }
+  EXPECT_EQ(mine, lm);
+  EXPECT_TRUE(fs::exists(tmp.path() / "out" / "basin_truth.png"));
+
+  // Names that would clash with a built-in method, a file name or each other are refused.
+  for (const char* bad : {"iconic_lm", "a/b", ""}) {
+    BasinOptions b = options(tmp.path() / "bad", {0}, {0}, 1);
+    b.custom.push_back({bad, o.custom[0].fn});
+    EXPECT_THROW(runBasin(sc, b), BasinError) << bad;
+  }
+  EXPECT_FALSE(fs::exists(tmp.path() / "bad"));
+}
+
+TEST(Basin, NuCovarianceInvertsTheSensorPoseCovariance) {
+  const perception::PoseVector nu = (perception::PoseVector() << 0.01, -0.02, 0.05, 0.3, -0.2, 0.1).finished();
+  const Eigen::Isometry3d B = perception::sensorPose({1.0, -4.0, 3.0}, {0.02, -0.5, 0.7});
+  perception::Matrix6d L = perception::Matrix6d::Random();
+  const perception::Matrix6d C = L * L.transpose() + perception::Matrix6d::Identity() * 1e-3;
+  const perception::Matrix6d back =
+      perception::sensorPoseCovariance(nu, perception::nuCovariance(nu, C, B), B);
+  // Central differences (h = 1e-6) make A to about 1e-9; the round trip keeps that.
+  EXPECT_LT((back - C).cwiseAbs().maxCoeff(), 1e-6 * C.cwiseAbs().maxCoeff());
 }
 
 }  // namespace
