@@ -168,3 +168,13 @@ def test_a_method_that_fails_stops_the_basin_with_its_line(demo, tmp_path, fn, m
 def test_unknown_builtin_method_names_the_choices(demo, tmp_path):
     with pytest.raises(ValueError, match="unknown method \"lm\" .*iconic_lm"):
         ambler.basin(demo, str(tmp_path), methods=["lm"])
+
+
+def test_the_matching_experiment_reports_the_users_method(tmp_path):
+    md = ambler.experiment_matching(str(tmp_path), sweeps=os.path.join(SOURCE, "scenarios", "experiments"),
+                                    custom={"mine": builtin_lm}, quick=True)
+    rows = {line.split("|")[1].strip(): line.split("|")[2:] for line in md.splitlines()
+            if line.startswith("| iconic_lm |") or line.startswith("| mine |")}
+    assert sorted(rows) == ["iconic_lm", "mine"]
+    assert rows["mine"] == rows["iconic_lm"]  # success, errors, iterations: every figure but the name
+    assert (tmp_path / "table.md").read_text() == md

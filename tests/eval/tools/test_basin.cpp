@@ -1,7 +1,8 @@
 // `ambler basin`: the draws' initial errors have the asked magnitudes exactly (horizontal
 // translation, rotation about a unit axis); on a noise-free terrain from zero initial error every
-// method that starts from T_0 succeeds in every trial; the basin sharded three ways merges into the unsharded CSV byte for byte; bad a user's own method (CustomMethod) is scored as a built-in one;
-// grids and scenarios are refused in one line before anything is written.
+// method that starts from T_0 succeeds in every trial; the basin sharded three ways merges into
+// the unsharded CSV byte for byte; a user's own method (CustomMethod) is scored as a built-in one;
+// bad grids and scenarios are refused in one line before anything is written.
 #include <gtest/gtest.h>
 
 #include <cmath>
