@@ -194,6 +194,21 @@ void validate(const FootfallConfig& cfg, const MapGrid& grid) {
   if (!(grid.cell > 0) || grid.rows <= 0 || grid.cols <= 0) fail("the map's grid is empty");
 }
 
+// Every layer the grid's size.
+void validateLayers(const ElevationLayers& m) {
+  const auto check = [&](const char* name, Eigen::Index rows, Eigen::Index cols) {
+    if (rows == m.grid.rows && cols == m.grid.cols) return;
+    std::ostringstream s;
+    s << "evaluateFootfalls: the " << name << " layer is " << rows << " x " << cols << ", the grid "
+      << m.grid.rows << " x " << m.grid.cols;
+    throw std::invalid_argument(s.str());
+  };
+  check("elevation", m.elevation.rows(), m.elevation.cols());
+  check("sigma", m.sigma.rows(), m.sigma.cols());
+  check("ceiling", m.ceiling.rows(), m.ceiling.cols());
+  check("state", m.state.rows(), m.state.cols());
+}
+
 }  // namespace
 
 std::string_view footfallMethodName(FootfallMethod m) {
@@ -234,8 +249,15 @@ CellRegion regionOfBox(const MapGrid& grid, double x0, double x1, double y0, dou
 std::vector<FootfallScores> evaluateFootfalls(const ElevationMap& map, const CellRegion& region,
                                               const FootfallConfig& cfg,
                                               const std::vector<FootfallMethod>& methods) {
-  const MapGrid& grid = map.grid();
+  return evaluateFootfalls(ElevationLayers(map), region, cfg, methods);
+}
+
+std::vector<FootfallScores> evaluateFootfalls(const ElevationLayers& map, const CellRegion& region,
+                                              const FootfallConfig& cfg,
+                                              const std::vector<FootfallMethod>& methods) {
+  const MapGrid& grid = map.grid;
   validate(cfg, grid);
+  validateLayers(map);
   // The region clipped to the map.
   const int r_begin = std::max(region.row0, 0), r_end = std::min(region.row0 + region.rows, grid.rows);
   const int c_begin = std::max(region.col0, 0), c_end = std::min(region.col0 + region.cols, grid.cols);
@@ -298,10 +320,10 @@ std::vector<FootfallScores> evaluateFootfalls(const ElevationMap& map, const Cel
   // k cells at or above the foot's plane make A_min (at least one: the highest point).
   const int k_support = std::clamp(int(std::ceil(cfg.min_support_fraction * n - 1e-9)), 1, n);
   const double tan_max = std::tan(cfg.max_normal_deviation_deg * M_PI / 180);
-  const auto& Z = map.elevation();
-  const auto& S = map.sigma();
-  const auto& C = map.shadowCeiling();
-  const auto& ST = map.state();
+  const auto& Z = map.elevation;
+  const auto& S = map.sigma;
+  const auto& C = map.ceiling;
+  const auto& ST = map.state;
 
   auto evaluateRows = [&](const tbb::blocked_range<int>& rows) {
     Scratch w;
@@ -313,8 +335,8 @@ std::vector<FootfallScores> evaluateFootfalls(const ElevationMap& map, const Cel
           int unknown = 0;
           for (size_t j = 0, i = 0; j < disk.span_w.size(); ++j) {  // row spans: contiguous reads
             const int rr = r + disk.span_drow[j], len = 2 * disk.span_w[j] + 1;
-            const float* zp = &Z(rr, c - disk.span_w[j]);
-            const std::uint8_t* sp = &ST(rr, c - disk.span_w[j]);
+            const float* zp = Z.data() + rr * Z.outerStride() + (c - disk.span_w[j]);
+            const std::uint8_t* sp = ST.data() + rr * ST.outerStride() + (c - disk.span_w[j]);
             for (int q = 0; q < len; ++q, ++i) {
               const bool k = sp[q] == std::uint8_t(CellState::Known) && std::isfinite(zp[q]);
               w.known[i] = k;

@@ -6,6 +6,7 @@
 // Convention: LOWER SCORE = BETTER for every method; NaN = not a candidate. Onboard code.
 #include <Eigen/Core>
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <optional>
 #include <string_view>
@@ -92,6 +93,36 @@ struct FootfallScores {
 // disk holds fewer than 3 cells, the region has no cell on the map, or the foot is wider than
 // the region (§5: the foot B is a subregion of R).
 std::vector<FootfallScores> evaluateFootfalls(const ElevationMap& map, const CellRegion& region,
+                                              const FootfallConfig& config = {},
+                                              const std::vector<FootfallMethod>& methods =
+                                                  {kFootfallMethods.begin(), kFootfallMethods.end()});
+
+// A raster held elsewhere, read in place: row-major, its cells contiguous, any stride between rows.
+template <class T>
+using RasterView = Eigen::Map<const Raster<T>, 0, Eigen::OuterStride<>>;
+template <class T>
+RasterView<T> rasterView(const Raster<T>& r) {
+  return RasterView<T>(r.data(), r.rows(), r.cols(), Eigen::OuterStride<>(r.cols()));
+}
+
+// A map's layers where someone else holds them (the Python module's numpy arrays), read without a
+// copy; each should be grid.rows × grid.cols.
+struct ElevationLayers {
+  MapGrid grid;
+  RasterView<float> elevation, sigma, ceiling;  // ceiling: the shadow ceiling
+  RasterView<std::uint8_t> state;               // CellState values
+  explicit ElevationLayers(const ElevationMap& map)
+      : grid(map.grid()), elevation(rasterView(map.elevation())), sigma(rasterView(map.sigma())),
+        ceiling(rasterView(map.shadowCeiling())), state(rasterView(map.state())) {}
+  ElevationLayers(const MapGrid& g, const RasterView<float>& z, const RasterView<float>& s,
+                  const RasterView<float>& c, const RasterView<std::uint8_t>& st)
+      : grid(g), elevation(z), sigma(s), ceiling(c), state(st) {}
+};
+
+// The same on layers held elsewhere: the same bits as on an ElevationMap holding those values (the
+// function above calls this one). Also throws std::invalid_argument naming a layer whose size is
+// not the grid's.
+std::vector<FootfallScores> evaluateFootfalls(const ElevationLayers& map, const CellRegion& region,
                                               const FootfallConfig& config = {},
                                               const std::vector<FootfallMethod>& methods =
                                                   {kFootfallMethods.begin(), kFootfallMethods.end()});

@@ -16,8 +16,11 @@
 #include <utility>
 #include <vector>
 
+#include "base/read_file.hpp"
 #include "base/temp_dir.hpp"
 #include "python/bindings.hpp"
+#include "eval/pictures/match_figures.hpp"
+#include "eval/run/run_state.hpp"
 #include "eval/run/runner.hpp"
 #include "eval/tools/report/report.hpp"
 #include "eval/scenario/scenario.hpp"
@@ -54,6 +57,7 @@ struct PyRun {
   std::optional<base::TempDir> temporary;  // out, when the caller gave none: removed with the run
   fs::path out;
   py::object metrics;
+  std::string footfall_map;  // the map the footfall stage chose on (view_K, composite), when it ran
 };
 
 std::shared_ptr<PyRun> run(const PyScenario& sc, const std::optional<fs::path>& out,
@@ -73,7 +77,30 @@ std::shared_ptr<PyRun> run(const PyScenario& sc, const std::optional<fs::path>& 
     r->products = std::make_shared<RunProducts>(eval::runScenarioKeeping(sc.scenario, opt));
   }
   r->metrics = py::module_::import("json").attr("loads")(r->products->metrics.dump());
+  if (const auto& f = sc.scenario.footfall)
+    r->footfall_map = f->map_view < 0 ? "composite" : eval::viewName(f->map_view);
   return r;
+}
+
+// One dict per registration of the run, in metrics.registration's order: its
+// matching/pair_I_J_METHOD.json (docs/scenario.md, "The run directory") with T_true, T_initial,
+// T_estimated (4 × 4) and covariance, covariance_pose (6 × 6, NaN where the JSON has null) as numpy
+// arrays (copies).
+py::list registrations(const PyRun& r) {
+  const py::object loads = py::module_::import("json").attr("loads");
+  const py::object array = py::module_::import("numpy").attr("array");
+  py::list out;
+  if (!r.products->metrics.contains("registration")) return out;
+  for (const auto& m : r.products->metrics["registration"]) {
+    const std::string stem = "pair_" + std::to_string(m["pair"][0].get<int>()) + "_" +
+                             std::to_string(m["pair"][1].get<int>()) + "_" +
+                             eval::methodFileName(m["method"].get<std::string>());
+    py::dict d = loads(base::readFile(r.out / "matching" / (stem + ".json")));
+    for (const char* key : {"T_true", "T_initial", "T_estimated", "covariance", "covariance_pose"})
+      if (d.contains(key) && !d[key].is_none()) d[key] = array(d[key], py::arg("dtype") = "float64");
+    out.append(d);
+  }
+  return out;
 }
 
 }  // namespace
@@ -116,18 +143,20 @@ void bindTypes(py::module_& m) {
       // T_WM, the map frame in the world (row 0 of the rasters at y_max, column 0 at x_min).
       .def_property_readonly("transform", [](const PyMap& p) { return poseArray(p.map->grid().T_WM); });
 
-  py::class_<PyScan>(m, "Scan", "A range image as the rover has it, unwrapped, with its edges and sensor; "
-                                "without the pose it was taken from")
-      .def_property_readonly("range", [](py::object self) { return view(self.cast<PyScan&>().scan->image.range, self); })
+  py::class_<PyScan>(m, "Scan", "A range image as the rover has it, with its sensor, without the pose it was "
+                                "taken from: a view's (unwrapped, with its edges) or World.scan's (as the "
+                                "sensor reported it: not unwrapped, no edges)")
+      .def_property_readonly("range", [](py::object self) { return view(self.cast<PyScan&>().image().range, self); })
+      .def_property_readonly("unwrapped", [](const PyScan& s) { return bool(s.scan); })
       .def_property_readonly("edges", [](py::object self) -> py::object {
-        const auto& e = self.cast<PyScan&>().scan->edges;
-        return e ? py::object(view(*e, self)) : py::object(py::none());
+        const PyScan& s = self.cast<PyScan&>();
+        return s.scan && s.scan->edges ? py::object(view(*s.scan->edges, self)) : py::object(py::none());
       })
-      .def_property_readonly("phi", [](const PyScan& s) { return py::array(py::cast(s.scan->image.phi)); })
-      .def_property_readonly("theta", [](const PyScan& s) { return py::array(py::cast(s.scan->image.theta)); })
+      .def_property_readonly("phi", [](const PyScan& s) { return py::array(py::cast(s.image().phi)); })
+      .def_property_readonly("theta", [](const PyScan& s) { return py::array(py::cast(s.image().theta)); })
       .def_property_readonly("points", [](const PyScan& s) {
         // The returns in the sensor frame (eq. 1), row by row: an N × 3 copy.
-        const perception::RangeImage& im = s.scan->image;
+        const perception::RangeImage& im = s.image();
         py::array_t<double> a({py::ssize_t(im.validCount()), py::ssize_t(3)});
         py::ssize_t n = 0;
         for (int r = 0; r < im.rows(); ++r)
@@ -141,11 +170,11 @@ void bindTypes(py::module_& m) {
       })
       .def_property_readonly("sensor_sigma_m", [](const PyScan& s) {
         // σ of each return's range as the noise model has it (NaN where nothing returned).
-        const perception::RangeImage& im = s.scan->image;
+        const perception::RangeImage& im = s.image();
         py::array_t<float> a({im.rows(), im.cols()});
         for (int r = 0; r < im.rows(); ++r)
           for (int c = 0; c < im.cols(); ++c)
-            a.mutable_at(r, c) = im.valid(r, c) ? float(s.scan->sensor.rangeSigma(im.range(r, c))) : NAN;
+            a.mutable_at(r, c) = im.valid(r, c) ? float(s.sensor().rangeSigma(im.range(r, c))) : NAN;
         return a;
       });
 
@@ -184,6 +213,18 @@ PYBIND11_MODULE(ambler, m) {
         const PyRun& r = self.cast<PyRun&>();
         py::list l;
         for (const auto& image : r.products->scans) l.append(view(image.range, self));
+        return l;
+      })
+      .def_property_readonly("registrations", &registrations)
+      .def_property_readonly("footfalls", [](const PyRun& r) {
+        // metrics.footfall's choices, each with the map they were made on ("map": view_K, composite).
+        py::list l;
+        if (!r.metrics.contains("footfall")) return l;
+        for (const py::handle& f : r.metrics["footfall"]) {
+          py::dict d = py::reinterpret_borrow<py::dict>(f).attr("copy")();
+          d["map"] = r.footfall_map;
+          l.append(d);
+        }
         return l;
       });
 

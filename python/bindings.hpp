@@ -47,10 +47,21 @@ struct PyMap {
   const perception::ElevationMap* map = nullptr;
 };
 
-// A scan as the rover has it (ambler.Scan): the unwrapped range image, its edges and the sensor
-// model, without the pose it was taken from (a method must not see where view J truly is).
+// A scan as the sensor reported it (stages.cpp: World.scan): its ranges still folded by the
+// ambiguity interval, no edges yet, and the sensor model it was taken with.
+struct RawScan {
+  perception::RangeImage image;
+  perception::SensorModel sensor;
+};
+
+// A scan as the rover has it (ambler.Scan), without the pose it was taken from (a method must not
+// see where view J truly is): a view's (`scan`: the range image unwrapped, its edges and the sensor
+// model) or, from World.scan, one not mapped yet (`raw`). One of the two is set.
 struct PyScan {
   std::shared_ptr<const perception::ScanMap> scan;  // image.T_WS is not shown
+  std::shared_ptr<const RawScan> raw;               // image.T_WS is not shown
+  const perception::RangeImage& image() const { return scan ? scan->image : raw->image; }
+  const perception::SensorModel& sensor() const { return scan ? scan->sensor : raw->sensor; }
 };
 
 // A view (ambler.View): a scan with the locus map made from it at `scan->image.T_WS` (its

@@ -17,6 +17,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 
 #include "perception/footfall.hpp"
 
@@ -509,6 +510,63 @@ TEST(Footfall, BadInputThrowsWithAClearMessage) {
   cfg = {};
   cfg.max_unknown_fraction = 1;
   expectInvalid([&] { evaluateFootfalls(map, wholeMap(g), cfg); }, "max_unknown_fraction");
+}
+
+// Layers held elsewhere (ElevationLayers: the Python module's numpy arrays) give the bits the same
+// values give in an ElevationMap, also when each layer is a block of a wider raster (a stride
+// between rows that is not the row's length), and are read in place: a change made to the wider
+// raster after the view was made changes the scores. A layer of the wrong size is refused.
+TEST(Footfall, LayersHeldElsewhereGiveTheMapsBitsAndAreReadInPlace) {
+  const MapGrid g = MapGrid::covering(0, 2, 0, 1.5, 0.05);
+  ElevationMap map(g);
+  for (int r = 0; r < g.rows; ++r)
+    for (int c = 0; c < g.cols; ++c) {
+      const unsigned hsh = (unsigned(r) * 73856093u) ^ (unsigned(c) * 19349663u);
+      const double z = 0.1 * std::sin(r * 0.3) * std::cos(c * 0.2) + 0.002 * double(hsh % 10);
+      if (hsh % 37 == 0)
+        map.setShadow(r, c, float(z + 0.05));
+      else
+        map.setKnown(r, c, float(z), float(0.002 + 0.001 * (hsh % 5)));
+    }
+  // Each layer in the middle of a raster 3 rows and 5 columns larger (filled with junk).
+  const auto embed = [&](const auto& layer, auto junk) {
+    using R = std::decay_t<decltype(layer)>;
+    R wide = R::Constant(layer.rows() + 3, layer.cols() + 5, junk);
+    wide.block(2, 1, layer.rows(), layer.cols()) = layer;
+    return wide;
+  };
+  Raster<float> z = embed(map.elevation(), 7.0f);
+  const Raster<float> s = embed(map.sigma(), -1.0f), c = embed(map.shadowCeiling(), 9.0f);
+  const Raster<std::uint8_t> st = embed(map.state(), std::uint8_t(CellState::Known));
+  const auto inner = [&](const auto& wide) {
+    using T = typename std::decay_t<decltype(wide)>::Scalar;
+    return RasterView<T>(&wide(2, 1), g.rows, g.cols, Eigen::OuterStride<>(wide.cols()));
+  };
+  const ElevationLayers layers(g, inner(z), inner(s), inner(c), inner(st));
+  ASSERT_EQ(layers.elevation.data(), &z(2, 1));
+  FootfallConfig cfg;
+  cfg.max_unknown_fraction = 0.1;
+  const CellRegion region = regionOfBox(g, 0.3, 1.7, 0.3, 1.2);
+  const auto want = evaluateFootfalls(map, region, cfg), got = evaluateFootfalls(layers, region, cfg);
+  ASSERT_EQ(want.size(), got.size());
+  for (size_t i = 0; i < want.size(); ++i) {
+    ASSERT_TRUE(want[i].best) << footfallMethodName(want[i].method);
+    EXPECT_TRUE(sameBits(want[i].score, got[i].score)) << footfallMethodName(want[i].method);
+    EXPECT_EQ(want[i].best, got[i].best);
+    EXPECT_EQ(std::memcmp(&want[i].best_score, &got[i].best_score, sizeof(double)), 0);
+  }
+  EXPECT_TRUE(sameBits(of(want, M::PlanarFit).tilt_deg, of(got, M::PlanarFit).tilt_deg));
+  // A spike at max-min's best cell, made in the wide raster: the view sees it.
+  const Eigen::Vector2i best = *of(want, M::MaxMin).best;
+  z(2 + best(0), 1 + best(1)) += 1.0f;
+  const auto after = evaluateFootfalls(layers, region, cfg, {M::MaxMin});
+  EXPECT_GT(after[0].score(best(0), best(1)), of(want, M::MaxMin).score(best(0), best(1)) + 0.9f);
+  // Wrong sizes.
+  const RasterView<float> short_view(s.data(), g.rows - 1, g.cols, Eigen::OuterStride<>(s.cols()));
+  const ElevationLayers short_sigma(g, inner(z), short_view, inner(c), inner(st));
+  expectInvalid([&] { evaluateFootfalls(short_sigma, region, cfg); },
+                "the sigma layer is " + std::to_string(g.rows - 1) + " x " + std::to_string(g.cols) + ", the grid " +
+                    std::to_string(g.rows) + " x " + std::to_string(g.cols));
 }
 
 // Speed is `ambler bench footfall`'s (docs/benchmarks.md), not a test's.
