@@ -60,6 +60,9 @@ std::shared_ptr<const perception::ScanMap> withoutPose(const perception::ScanMap
 PyRegistration registerPair(const PyView& view_i, const PyScan& scan_j, const py::handle& T_initial,
                             const std::string& method_name) {
   const MatchMethod method = methodFromName(method_name, "register");
+  if (!scan_j.scan)
+    throw py::value_error("register: scan_j is a raw scan (World.scan): map it first (ambler.map_scan), which "
+                          "unwraps it and finds its edges, and pass the View's .scan");
   const Eigen::Isometry3d T_0 = poseFromArray(T_initial, "register: T_initial");
   const Eigen::Isometry3d& T_WS_i = view_i.scan->image.T_WS;
   auto result = std::make_shared<PairResult>();

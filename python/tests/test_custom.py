@@ -178,3 +178,18 @@ def test_the_matching_experiment_reports_the_users_method(tmp_path):
     assert sorted(rows) == ["iconic_lm", "mine"]
     assert rows["mine"] == rows["iconic_lm"]  # success, errors, iterations: every figure but the name
     assert (tmp_path / "table.md").read_text() == md
+
+
+def test_register_stage_by_stage_gives_the_runs_registration(tmp_path):
+    # world -> scan -> map_scan -> register reproduces the match stage's estimate bit for bit.
+    s = ambler.load_scenario(DEMO, **{"matching.methods": ["iconic_lm"]})
+    run = ambler.run(s, out=str(tmp_path))
+    w = ambler.world(s)
+    views = [ambler.map_scan(w.scan(w.view_pose(k), seed=w.view_seed(k)), w.view_pose(k), s) for k in (0, 1)]
+    reg_run = run.registrations[0]
+    reg = ambler.register(views[0], views[1].scan, reg_run["T_initial"], "iconic_lm")
+    np.testing.assert_array_equal(reg.T, reg_run["T_estimated"])
+    assert reg.iterations == reg_run["iterations"] and reg.accepted == reg_run["accepted"]
+    # A raw scan (not unwrapped, no edges) is refused with what to do.
+    with pytest.raises(ValueError, match="raw scan"):
+        ambler.register(views[0], w.scan(w.view_pose(1)), reg_run["T_initial"])
