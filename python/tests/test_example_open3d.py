@@ -5,9 +5,9 @@ import os
 import subprocess
 import sys
 
-SOURCE = os.environ["AMBLER_SOURCE_DIR"]
 import pytest
 
+SOURCE = os.environ["AMBLER_SOURCE_DIR"]
 pytest.importorskip("open3d", reason="Debian's python3-open3d (scripts/setup.sh installs it)")
 
 
