@@ -20,6 +20,7 @@
 #include "base/read_file.hpp"
 #include "sim/leg.hpp"
 #include "sim/leg_crop.hpp"
+#include "sim/leg_hfield.hpp"
 
 namespace ambler::sim {
 
@@ -265,6 +266,8 @@ struct Box {
 std::optional<LegOutcome> simulate(mjModel* m, mjData* d, const Rig& g, const LegConfig& c,
                                    const std::vector<float>& original, double probe_top, const std::string& where,
                                    double x, double y, const Box* bounds) {
+  // The foot's heightfield contacts without MPR on prisms that cannot touch it (sim/leg_hfield.hpp).
+  const hfield::Scope culling(m, c.cull_prisms);
   mj_forward(m, d);
   const double radius = 0.5 * c.foot_diameter_m, t = c.foot_thickness_m;
   double probe_step = 0.01;
@@ -420,6 +423,7 @@ struct Leg::Impl {
     data.reset(mj_makeData(model.get()));
     if (!data) throw std::runtime_error(world_xml.string() + ": MuJoCo could not allocate the leg's data");
     rig = sim::rig(model.get());
+    if (config.cull_prisms) hfield::install();  // MuJoCo's collision table, set before any step runs
     if (config.soil == Soil::Sand && rig.hfield_geom < 0)
       throw std::runtime_error(world_xml.string() + ": sand needs a heightfield geom");
     if (rig.hfield_geom >= 0) {

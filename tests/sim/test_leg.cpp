@@ -249,6 +249,36 @@ TEST(Leg, StepsAreIndependentOfEachOther) {
   expectSame(b, fresh);
 }
 
+// The culled heightfield collision (LegConfig::cull_prisms, sim/leg_hfield.hpp) runs MuJoCo
+// 2.2.2's heightfield × mesh algorithm on the same prisms in the same order, with the same support
+// functions, and skips only prisms that a separating plane keeps more than 10 µm from a foot tile,
+// where MPR finds no contact: the contacts, and so every step, are MuJoCo's own to the bit. Checked
+// on a tilted plane, a ledge the foot tilts over, sand beside a rock and the rock's face.
+TEST(Leg, CullingPrismsChangesNoOutcome) {
+  struct Case {
+    const char* what;
+    terrains::Terrain terrain;
+    Eigen::Vector2d at;
+    Soil soil;
+  };
+  const std::vector<Case> cases{
+      {"10 deg plane", test::planeTerrain(std::tan(10 * kDeg), 0, 0, 1.0, 0.05), {0.0, 0.0}, Soil::Rock},
+      {"half over a 10 cm ledge", ledge(0.0, 0.10, 0.05), {0.04, 0.0}, Soil::Rock},
+      {"sand beside a slab", planeWithSlab(0.3, 0.3, 0.075, 0.10), {0.5, 0.5}, Soil::Sand},
+      {"on the slab, sand", planeWithSlab(0.3, 0.3, 0.075, 0.10), {0.12, 0.05}, Soil::Sand}};
+  for (const Case& k : cases) {
+    SCOPED_TRACE(k.what);
+    LegWorld w(k.terrain);
+    LegConfig culled;
+    culled.soil = k.soil;
+    LegConfig mujoco = culled;
+    mujoco.cull_prisms = false;
+    const LegOutcome a = stepLeg(w.xml, k.at.x(), k.at.y(), culled);
+    print(k.what, a);
+    expectSame(a, stepLeg(w.xml, k.at.x(), k.at.y(), mujoco));
+  }
+}
+
 // leg.xml (the world plus the leg) is plain MJCF that MuJoCo loads, e.g. in `simulate`.
 TEST(Leg, WritesALegWorldThatLoads) {
   LegWorld w(planeWithSlab(0.3, 0.3, 0.075, 0.05));

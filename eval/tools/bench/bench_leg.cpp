@@ -1,5 +1,6 @@
 // `ambler bench leg` (docs/benchmarks.md, docs/leg.md): the leg built once (sim::Leg, as the leg stage
-// builds it) against one per step (sim::stepLeg), on a scenario's world and footfall region.
+// builds it) against one per step (sim::stepLeg) and against MuJoCo's own heightfield collision
+// (LegConfig::cull_prisms off), on a scenario's world and footfall region.
 #include <tbb/global_control.h>
 #include <unistd.h>
 
@@ -61,7 +62,13 @@ nlohmann::ordered_json benchLeg(const Scenario& sc, const BenchOptions& opt) {
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   Progress progress("bench leg", opt.repetitions + 2, 0, Progress::modeFor(opt.progress));
   std::vector<double> build_s, step_s, step_cpu_s, whole_s, whole_cpu_s, reference_s, reference_cpu_s;
-  std::vector<sim::LegOutcome> fast(at.size()), reference(at.size());
+  std::vector<double> unculled_s, unculled_cpu_s;
+  std::vector<sim::LegOutcome> fast(at.size()), reference(at.size()), unculled(at.size());
+  // The same leg with MuJoCo's own heightfield collision (every prism under a tile's box to MPR:
+  // the leg before issue 28's speed-up), stepped in turn with the culling one on every footfall.
+  sim::LegConfig mujoco_collision = config;
+  mujoco_collision.cull_prisms = false;
+  sim::Leg legacy(world, region, mujoco_collision);
   for (int k = 0; k < opt.repetitions; ++k) {
     base::Stopwatch t;
     sim::Leg leg(world, region, config);
@@ -73,6 +80,11 @@ nlohmann::ordered_json benchLeg(const Scenario& sc, const BenchOptions& opt) {
       fast[i] = leg.step(at[i].x(), at[i].y());
       step_cpu_s.push_back(cpuSeconds() - c0);
       step_s.push_back(ts.seconds());
+      base::Stopwatch tu;
+      const double u0 = cpuSeconds();
+      unculled[i] = legacy.step(at[i].x(), at[i].y());
+      unculled_cpu_s.push_back(cpuSeconds() - u0);
+      unculled_s.push_back(tu.seconds());
     }
     progress.step("leg built once");
   }
@@ -95,11 +107,15 @@ nlohmann::ordered_json benchLeg(const Scenario& sc, const BenchOptions& opt) {
   }
   progress.step("stepLeg per step");
   progress.finish();
-  double d_tilt = 0, d_sink = 0, d_slip = 0;
+  double d_tilt = 0, d_sink = 0, d_slip = 0, u_tilt = 0, u_sink = 0, u_slip = 0, u_time = 0;
   for (std::size_t i = 0; i < at.size(); ++i) {
     d_tilt = std::max(d_tilt, std::abs(fast[i].tilt_deg - reference[i].tilt_deg));
     d_sink = std::max(d_sink, std::abs(fast[i].sink_m - reference[i].sink_m));
     d_slip = std::max(d_slip, std::abs(fast[i].slip_m - reference[i].slip_m));
+    u_tilt = std::max(u_tilt, std::abs(fast[i].tilt_deg - unculled[i].tilt_deg));
+    u_sink = std::max(u_sink, std::abs(fast[i].sink_m - unculled[i].sink_m));
+    u_slip = std::max(u_slip, std::abs(fast[i].slip_m - unculled[i].slip_m));
+    u_time = std::max(u_time, std::abs(fast[i].time_s - unculled[i].time_s));
   }
 
   std::printf("ambler bench leg (%s, %s, %.0f N; %zu footfalls, 1 thread; medians of %d builds and %zu steps)\n",
@@ -109,6 +125,8 @@ nlohmann::ordered_json benchLeg(const Scenario& sc, const BenchOptions& opt) {
   std::printf("  %-52s %10.1f\n", "build once (the world loaded, cropped, compiled)", 1e3 * median(build_s));
   std::printf("  %-52s %10.1f %12.1f\n", "a step of the leg built once (sim::Leg::step)", 1e3 * median(step_s),
               1e3 * median(step_cpu_s));
+  std::printf("  %-52s %10.1f %12.1f\n", "the same, MuJoCo's heightfield collision (no culling)",
+              1e3 * median(unculled_s), 1e3 * median(unculled_cpu_s));
   std::printf("  %-52s %10.1f %12.1f\n", "a step of the whole world built once (no crop)", 1e3 * median(whole_s),
               1e3 * median(whole_cpu_s));
   std::printf("  %-52s %10.1f %12.1f\n", "a step built from the world file (sim::stepLeg)", 1e3 * median(reference_s),
@@ -117,6 +135,8 @@ nlohmann::ordered_json benchLeg(const Scenario& sc, const BenchOptions& opt) {
               probe.droppedGeoms(), probe.cropped() ? "" : " (not cropped: the whole world)");
   std::printf("  largest difference built-once - per-step: tilt %.2g deg, sink %.2g m, slip %.2g m\n", d_tilt, d_sink,
               d_slip);
+  std::printf("  largest difference culled - MuJoCo's collision: tilt %.2g deg, sink %.2g m, slip %.2g m, settled %.2g s\n",
+              u_tilt, u_sink, u_slip, u_time);
   nlohmann::ordered_json j;
   j["scenario"] = sc.file.string();
   j["footfalls"] = at.size();
@@ -124,6 +144,8 @@ nlohmann::ordered_json benchLeg(const Scenario& sc, const BenchOptions& opt) {
   j["build_ms"] = 1e3 * median(build_s);
   j["step_ms"] = 1e3 * median(step_s);
   j["step_cpu_ms"] = 1e3 * median(step_cpu_s);
+  j["unculled_step_ms"] = 1e3 * median(unculled_s);
+  j["unculled_step_cpu_ms"] = 1e3 * median(unculled_cpu_s);
   j["whole_world_step_ms"] = 1e3 * median(whole_s);
   j["whole_world_step_cpu_ms"] = 1e3 * median(whole_cpu_s);
   j["reference_step_ms"] = 1e3 * median(reference_s);
@@ -132,6 +154,7 @@ nlohmann::ordered_json benchLeg(const Scenario& sc, const BenchOptions& opt) {
   j["geoms_kept"] = probe.terrainGeoms();
   j["geoms_dropped"] = probe.droppedGeoms();
   j["max_abs_diff"] = {{"tilt_deg", d_tilt}, {"sink_m", d_sink}, {"slip_m", d_slip}};
+  j["max_abs_diff_unculled"] = {{"tilt_deg", u_tilt}, {"sink_m", u_sink}, {"slip_m", u_slip}, {"time_s", u_time}};
   if (!opt.json.empty()) writeJson(opt.json, j);
   return j;
 }

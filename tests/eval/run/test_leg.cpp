@@ -160,5 +160,82 @@ TEST(Run, LegBuiltOnceMatchesStepLegOnTheSandbox) {
   EXPECT_THROW(leg_sand.step(region.x_max + 0.01, centre.y()), std::invalid_argument);
 }
 
+// Issue 28: the leg's culled heightfield collision (sim::LegConfig::cull_prisms, the default) against
+// MuJoCo 2.2.2's own (cull_prisms = false: the leg before the speed-up), as the leg stage steps:
+// on the world cropped to the footfall region, no hold. Terrains of the footfall experiment
+// (scenarios/experiments/footfall_trials.yaml: the sandbox with other seeds, regions and rock
+// abundances), sand and rock soil, 3 × 3 footfalls over each region's candidate centres (a foot
+// radius inside it, as `ambler bench leg` places them): 36 footfalls.
+//
+// The outcomes must agree within what the settle rule cannot tell apart (above, derived here from
+// the config): one window w at speeds under v and ω, ω·w of tilt, (v + ω·t)·w of slip,
+// (v + ω·√(r² + t²))·w of sink, and on sand one more 0.1 mm yield step of sink. The culling skips
+// only prisms where MPR finds no contact, so they agree to the bit; the test prints how many did.
+TEST(Run, LegCulledCollisionMatchesMuJoCosOnTheFootfallTerrains) {
+  struct Variant {
+    std::uint64_t seed;
+    Eigen::Vector2d x, y;
+    double abundance;
+    bool sand;
+  };
+  const std::vector<Variant> variants{{2, {-1.5, -0.5}, {0.0, 1.0}, 0.16, true},
+                                      {9, {0.5, 1.5}, {1.0, 2.0}, 0.16, true},
+                                      {13, {-1.0, 0.0}, {1.5, 2.5}, 0.08, true},
+                                      {7, {-0.5, 0.5}, {0.5, 1.5}, 0.08, false}};
+  const Scenario base = loadScenario(fs::path(AMBLER_SOURCE_DIR) / "scenarios" / "experiments" / "sandbox.yaml");
+  int footfalls = 0, identical = 0;
+  double d_tilt = 0, d_sink = 0, d_slip = 0;
+  for (const Variant& v : variants) {
+    Scenario sc = base;
+    sc.seed = v.seed;
+    sc.terrain.rocks->abundance_k = v.abundance;
+    sc.footfall->x_m = v.x;
+    sc.footfall->y_m = v.y;
+    test::TempDir dir;
+    const fs::path world = sim::writeWorld(scenarioTerrain(sc), dir.path(), "sandbox");
+    sim::LegConfig culled = legConfig(sc);
+    culled.soil = v.sand ? sim::Soil::Sand : sim::Soil::Rock;
+    ASSERT_TRUE(culled.cull_prisms);  // the default
+    sim::LegConfig mujoco = culled;
+    mujoco.cull_prisms = false;
+    const sim::LegRegion region = legRegion(sc);
+    sim::Leg fast(world, region, culled), before(world, region, mujoco);
+    // The settle rule's window (docs/leg.md, "A step"), and the sand's yield step.
+    const double w = culled.settle_window_s, speed = culled.settle_speed_m_s;
+    const double omega = culled.settle_angular_speed_rad_s, t = culled.foot_thickness_m;
+    const double r = 0.5 * culled.foot_diameter_m, yield = v.sand ? 1e-4 : 0.0;
+    const double tilt_tol = omega * w * 180 / std::numbers::pi;
+    const double slip_tol = (speed + omega * t) * w + yield;
+    const double sink_tol = (speed + omega * std::hypot(r, t)) * w + yield;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        const auto lerp = [r](double lo, double hi, int k) { return lo + r + 0.5 * k * (hi - lo - 2 * r); };
+        const double x = lerp(region.x_min, region.x_max, j), y = lerp(region.y_min, region.y_max, i);
+        SCOPED_TRACE("seed " + std::to_string(v.seed) + " at (" + std::to_string(x) + ", " + std::to_string(y) + ")" +
+                     (v.sand ? " sand" : " rock"));
+        const sim::LegOutcome a = fast.step(x, y), b = before.step(x, y);
+        std::printf("seed %2d (%6.3f, %6.3f) %s: tilt %.4f deg (%+.2g), sink %.3f mm (%+.2g), slip %.3f mm (%+.2g), "
+                    "settled at %.3f s (%+.3f)\n",
+                    int(v.seed), x, y, v.sand ? "sand" : "rock", a.tilt_deg, a.tilt_deg - b.tilt_deg, 1e3 * a.sink_m,
+                    1e3 * (a.sink_m - b.sink_m), 1e3 * a.slip_m, 1e3 * (a.slip_m - b.slip_m), a.time_s,
+                    a.time_s - b.time_s);
+        EXPECT_EQ(a.settled, b.settled);
+        EXPECT_EQ(a.contact_cap_reached, b.contact_cap_reached);
+        EXPECT_LE(std::abs(a.tilt_deg - b.tilt_deg), tilt_tol);
+        EXPECT_LE(std::abs(a.sink_m - b.sink_m), sink_tol);
+        EXPECT_LE(std::abs(a.slip_m - b.slip_m), slip_tol);
+        d_tilt = std::max(d_tilt, std::abs(a.tilt_deg - b.tilt_deg));
+        d_sink = std::max(d_sink, std::abs(a.sink_m - b.sink_m));
+        d_slip = std::max(d_slip, std::abs(a.slip_m - b.slip_m));
+        ++footfalls;
+        identical += a.tilt_deg == b.tilt_deg && a.sink_m == b.sink_m && a.slip_m == b.slip_m && a.time_s == b.time_s;
+      }
+    EXPECT_EQ(fast.fallbacks(), 0);
+  }
+  std::printf("%d footfalls, %d identical to the bit; largest difference: tilt %.2g deg, sink %.2g m, slip %.2g m\n",
+              footfalls, identical, d_tilt, d_sink, d_slip);
+  EXPECT_EQ(footfalls, 36);
+}
+
 }  // namespace
 }  // namespace ambler::eval
