@@ -1,9 +1,9 @@
 #pragma once
-// The leg's heightfield × foot-tile collision (docs/leg.md, "Where the time went"), included by
+// The leg's heightfield × foot-tile collision (docs/leg.md, "The foot's heightfield contacts"), included by
 // sim/leg_step.cpp only. MuJoCo 2.2.2 collides a convex mesh with a heightfield by running MPR
 // (libccd's ccdMPRPenetration) on every prism of the heightfield's cells under the mesh's bounding
 // box whose top reaches the mesh's lowest point. Under the foot's 6 cm tiles on the sandbox's 2 cm
-// sand that is ~210 MPR calls a collision pass, of which ~19 find a contact: a tile tilted by a few
+// sand that is ~210 MPR calls a collision pass, of which ~11 find a contact: a tile tilted by a few
 // degrees, or a crater that keeps the sand's relief, puts most prisms of its box below the tile or
 // beside it. This is the same computation in the same order — the same sub-grid, the same prisms,
 // the same MPR on the same support functions and numbers, the same contacts — except that a prism
@@ -187,11 +187,6 @@ inline State& state() {
   static State s;
   return s;
 }
-
-// The tile's extent along a 2D axis (a·x + b·y over its vertices in the heightfield frame).
-struct Extent {
-  mjtNum lo, hi;
-};
 
 inline int collide(const mjModel* m, const mjData* d, mjContact* con, int g1, int g2, mjtNum margin) {
   const State& s = state();
