@@ -172,7 +172,7 @@ inline std::vector<Plane> facePlanes(const mjModel* m, int mesh) {
   return planes;
 }
 
-// The model a leg step culls on, with its meshes' face planes.
+// The model a leg step culls on, with its meshes' face planes (none: the cull uses the other planes).
 struct Context {
   const mjModel* model = nullptr;
   std::vector<std::vector<Plane>> planes;  // by mesh id
@@ -366,8 +366,13 @@ class Scope {
   Scope(const mjModel* m, bool on) : was_(active) {
     if (!on || !install()) return;
     context_.model = m;
+    // The meshes that can meet a heightfield: those of moving bodies (the foot's tiles), not the
+    // world's rocks, which MuJoCo never collides with the world's heightfield.
     context_.planes.resize(m->nmesh);
-    for (int k = 0; k < m->nmesh; ++k) context_.planes[k] = facePlanes(m, k);
+    for (int g = 0; g < m->ngeom; ++g)
+      if (const int k = m->geom_dataid[g]; m->geom_type[g] == mjGEOM_MESH && m->geom_bodyid[g] != 0 &&
+                                           context_.planes[k].empty())
+        context_.planes[k] = facePlanes(m, k);
     active = &context_;
   }
   ~Scope() { active = was_; }
