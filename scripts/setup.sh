@@ -5,6 +5,7 @@ set -euo pipefail
 packages=(
   build-essential cmake ninja-build pkg-config
   libmujoco-dev libqhull-dev        # MuJoCo 2.2.2; its CMake config names libqhull_r
+  libccd-dev                        # libccd, whose MPR MuJoCo runs: the leg's own heightfield collision calls it
   libgl-dev libglx-dev libopengl-dev  # MuJoCo's CMake config calls find_dependency(OpenGL)
   libembree-dev libtbb-dev          # ray casting, parallel loops
   libeigen3-dev libopencv-dev       # maths, images
