@@ -177,6 +177,88 @@ State& state() {
   return s;
 }
 
+// What the culling needs of one tile, in the heightfield's frame: its vertices; its extent along
+// the normal of the cells' diagonal (c, r)–(c+1, r+1), (dy, −dx) (x and y are its box lo/hi); its
+// downward faces (the sole), below which a prism's six vertices may all lie; and the horizontal
+// parts of its side faces' normals, along which the prism's triangle may lie beyond the tile's
+// shadow. `on` is false for a mesh too large for the fixed arrays (then every prism goes to MPR).
+struct Culler {
+  static constexpr int kMax = 64;
+  struct Axis {
+    mjtNum a[2], lo, hi, gap;
+  };
+  bool on = false;
+  int nv = 0, ndown = 0, naxes = 0;
+  mjtNum gap = 0;
+  const mjtNum *lo = nullptr, *hi = nullptr;
+  std::array<std::array<mjtNum, 3>, kMax> tv;
+  std::array<Plane, kMax> down;
+  std::array<Axis, kMax + 1> axes;
+
+  Culler(const Tile& tile, const std::vector<Plane>& local, mjtNum margin, mjtNum dx, mjtNum dy, const mjtNum* lo_,
+         const mjtNum* hi_)
+      : nv(tile.m->mesh_vertnum[tile.mesh]), gap(kCullGap + margin), lo(lo_), hi(hi_) {
+    on = nv <= kMax && int(local.size()) <= kMax;
+    if (!on) return;
+    const float* mv = tile.m->mesh_vert + 3 * tile.m->mesh_vertadr[tile.mesh];
+    for (int i = 0; i < nv; ++i) {
+      const mjtNum p[3] = {mv[3 * i], mv[3 * i + 1], mv[3 * i + 2]};
+      mju_rotVecMat(tv[i].data(), p, tile.mat);
+      mju_addTo3(tv[i].data(), tile.pos);
+    }
+    axes[naxes++] = {{dy, -dx}, 0, 0, gap * std::hypot(dx, dy)};
+    for (const Plane& pl : local) {
+      Plane h;
+      mju_rotVecMat(h.n, pl.n, tile.mat);
+      h.d = pl.d + mju_dot3(h.n, tile.pos);
+      if (h.n[2] < -0.5) down[ndown++] = h;
+      else if (std::abs(h.n[2]) < 0.5) axes[naxes++] = {{h.n[0], h.n[1]}, 0, 0, gap * std::hypot(h.n[0], h.n[1])};
+    }
+    for (int k = 0; k < naxes; ++k) {
+      Axis& ax = axes[k];
+      ax.lo = 1e300, ax.hi = -1e300;
+      for (int i = 0; i < nv; ++i) {
+        const mjtNum t = ax.a[0] * tv[i][0] + ax.a[1] * tv[i][1];
+        ax.lo = std::min(ax.lo, t), ax.hi = std::max(ax.hi, t);
+      }
+    }
+  }
+
+  // True when a plane separates the prism from the tile by more than `gap`.
+  bool separated(const Prism& p) const {
+    const mjtNum* a = p.v[3];
+    const mjtNum* b = p.v[4];
+    const mjtNum* c = p.v[5];
+    // Under it: all six vertices beyond a downward face (the sole).
+    for (int k = 0; k < ndown; ++k) {
+      const Plane& pl = down[k];
+      bool all = true;
+      for (int i = 5; i >= 0 && all; --i) all = mju_dot3(pl.n, p.v[i]) > pl.d + gap;
+      if (all) return true;
+    }
+    // Beside it: the triangle's x or y extent beyond the tile's box, or its extent along the
+    // diagonal's normal or a side face's beyond the tile's.
+    const mjtNum txlo = std::min({a[0], b[0], c[0]}), txhi = std::max({a[0], b[0], c[0]});
+    const mjtNum tylo = std::min({a[1], b[1], c[1]}), tyhi = std::max({a[1], b[1], c[1]});
+    if (txhi < lo[0] - gap || txlo > hi[0] + gap || tyhi < lo[1] - gap || tylo > hi[1] + gap) return true;
+    for (int k = 0; k < naxes; ++k) {
+      const Axis& ax = axes[k];
+      const mjtNum pa = ax.a[0] * a[0] + ax.a[1] * a[1], pb = ax.a[0] * b[0] + ax.a[1] * b[1],
+                   pc = ax.a[0] * c[0] + ax.a[1] * c[1];
+      if (std::max({pa, pb, pc}) < ax.lo - ax.gap || std::min({pa, pb, pc}) > ax.hi + ax.gap) return true;
+    }
+    // Above it: every tile vertex above the plane of the triangle's top, under which the whole
+    // column lies.
+    const mjtNum u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    mjtNum n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    if (n[2] < 0) n[0] = -n[0], n[1] = -n[1], n[2] = -n[2];
+    const mjtNum need = mju_dot3(n, a) + gap * std::sqrt(mju_dot3(n, n));
+    for (int i = 0; i < nv; ++i)
+      if (n[0] * tv[i][0] + n[1] * tv[i][1] + n[2] * tv[i][2] <= need) return false;
+    return true;
+  }
+};
+
 int collide(const mjModel* m, const mjData* d, mjContact* con, int g1, int g2, mjtNum margin) {
   const State& s = state();
   if (!active || active->model != m || m->geom_type[g2] != mjGEOM_MESH || !s.original)
@@ -228,79 +310,7 @@ int collide(const mjModel* m, const mjData* d, mjContact* con, int g1, int g2, m
   tile.margin = margin;
   const mjtNum dx = (2.0 * size[0]) / (ncol - 1), dy = (2.0 * size[1]) / (nrow - 1);
 
-  // For the culling, in the heightfield frame: the tile's vertices; its extent along the normal
-  // of the cells' diagonal (c, r)–(c+1, r+1), (dy, -dx) (x and y are its box); its downward faces
-  // (the sole), below which a prism's six vertices may all lie; and the horizontal parts of its
-  // side faces' normals, along which the prism's triangle may lie beyond the tile's shadow.
-  const int nv = m->mesh_vertnum[tile.mesh];
-  const float* mv = m->mesh_vert + 3 * m->mesh_vertadr[tile.mesh];
-  constexpr int kMax = 64;
-  const std::vector<Plane>& local = active->planes[tile.mesh];
-  const bool cull = nv <= kMax && int(local.size()) <= kMax;
-  std::array<std::array<mjtNum, 3>, kMax> tv;
-  struct Axis {
-    mjtNum a[2], lo, hi, gap;
-  };
-  std::array<Plane, kMax> down;
-  std::array<Axis, kMax + 1> axes;
-  int ndown = 0, naxes = 0;
-  const mjtNum gap = kCullGap + margin;
-  if (cull) {
-    for (int i = 0; i < nv; ++i) {
-      const mjtNum p[3] = {mv[3 * i], mv[3 * i + 1], mv[3 * i + 2]};
-      mju_rotVecMat(tv[i].data(), p, tile.mat);
-      mju_addTo3(tv[i].data(), tile.pos);
-    }
-    axes[naxes++] = {{dy, -dx}, 0, 0, gap * std::hypot(dx, dy)};
-    for (const Plane& pl : local) {
-      Plane h;
-      mju_rotVecMat(h.n, pl.n, tile.mat);
-      h.d = pl.d + mju_dot3(h.n, tile.pos);
-      if (h.n[2] < -0.5) down[ndown++] = h;
-      else if (std::abs(h.n[2]) < 0.5) axes[naxes++] = {{h.n[0], h.n[1]}, 0, 0, gap * std::hypot(h.n[0], h.n[1])};
-    }
-    for (int k = 0; k < naxes; ++k) {
-      Axis& ax = axes[k];
-      ax.lo = 1e300, ax.hi = -1e300;
-      for (int i = 0; i < nv; ++i) {
-        const mjtNum t = ax.a[0] * tv[i][0] + ax.a[1] * tv[i][1];
-        ax.lo = std::min(ax.lo, t), ax.hi = std::max(ax.hi, t);
-      }
-    }
-  }
-  // True when a plane separates the prism from the tile by more than `gap`.
-  const auto separated = [&](const Prism& p) {
-    const mjtNum* a = p.v[3];
-    const mjtNum* b = p.v[4];
-    const mjtNum* c = p.v[5];
-    // Under it: all six vertices beyond a downward face (the sole).
-    for (int k = 0; k < ndown; ++k) {
-      const Plane& pl = down[k];
-      bool all = true;
-      for (int i = 5; i >= 0 && all; --i) all = mju_dot3(pl.n, p.v[i]) > pl.d + gap;
-      if (all) return true;
-    }
-    // Beside it: the triangle's x or y extent beyond the tile's box, or its extent along the
-    // diagonal's normal or a side face's beyond the tile's.
-    const mjtNum txlo = std::min({a[0], b[0], c[0]}), txhi = std::max({a[0], b[0], c[0]});
-    const mjtNum tylo = std::min({a[1], b[1], c[1]}), tyhi = std::max({a[1], b[1], c[1]});
-    if (txhi < lo[0] - gap || txlo > hi[0] + gap || tyhi < lo[1] - gap || tylo > hi[1] + gap) return true;
-    for (int k = 0; k < naxes; ++k) {
-      const Axis& ax = axes[k];
-      const mjtNum pa = ax.a[0] * a[0] + ax.a[1] * a[1], pb = ax.a[0] * b[0] + ax.a[1] * b[1],
-                   pc = ax.a[0] * c[0] + ax.a[1] * c[1];
-      if (std::max({pa, pb, pc}) < ax.lo - ax.gap || std::min({pa, pb, pc}) > ax.hi + ax.gap) return true;
-    }
-    // Above it: every tile vertex above the plane of the triangle's top, under which the whole
-    // column lies.
-    const mjtNum u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    mjtNum n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
-    if (n[2] < 0) n[0] = -n[0], n[1] = -n[1], n[2] = -n[2];
-    const mjtNum need = mju_dot3(n, a) + gap * std::sqrt(mju_dot3(n, n));
-    for (int i = 0; i < nv; ++i)
-      if (n[0] * tv[i][0] + n[1] * tv[i][1] + n[2] * tv[i][2] <= need) return false;
-    return true;
-  };
+  const Culler culler(tile, active->planes[tile.mesh], margin, dx, dy, lo, hi);
 
   Prism prism;
   prism.v[0][2] = prism.v[1][2] = prism.v[2][2] = -size[3];
@@ -320,7 +330,7 @@ int collide(const mjModel* m, const mjData* d, mjContact* con, int g1, int g2, m
         prism.v[5][2] = data[(r + dr[i]) * ncol + c] * size[2] + margin;
         if (++nvert <= 2) continue;
         if (prism.v[3][2] < zmin && prism.v[4][2] < zmin && prism.v[5][2] < zmin) continue;
-        if (cull && separated(prism)) continue;
+        if (culler.on && culler.separated(prism)) continue;
         double depth;
         ccd_vec3_t dir, pos;
         if (ccdMPRPenetration(&prism, &tile, &ccd, &depth, &dir, &pos) != 0 || nearOrigin(dir)) continue;
