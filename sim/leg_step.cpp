@@ -266,7 +266,7 @@ struct Box {
 std::optional<LegOutcome> simulate(mjModel* m, mjData* d, const Rig& g, const LegConfig& c,
                                    const std::vector<float>& original, double probe_top, const std::string& where,
                                    double x, double y, const Box* bounds) {
-  // The foot's heightfield contacts without MPR on prisms that cannot touch it (sim/leg_hfield.hpp).
+  // The foot's heightfield contacts without MPR on prisms that cannot touch it (sim/leg_hfield.cpp).
   const hfield::Scope culling(m, c.cull_prisms);
   mj_forward(m, d);
   const double radius = 0.5 * c.foot_diameter_m, t = c.foot_thickness_m;
