@@ -1,4 +1,5 @@
-// The leg's heightfield × foot-tile collision (docs/leg.md, "The foot's heightfield contacts"), MuJoCo 2.2.2 collides a convex mesh with a heightfield by running MPR
+// The leg's heightfield × foot-tile collision (docs/leg.md, "The foot's heightfield contacts").
+// MuJoCo 2.2.2 collides a convex mesh with a heightfield by running MPR
 // (libccd's ccdMPRPenetration) on every prism of the heightfield's cells under the mesh's bounding
 // box whose top reaches the mesh's lowest point. Under the foot's 6 cm tiles on the sandbox's 2 cm
 // sand that is ~210 MPR calls a collision pass, of which ~11 find a contact: a tile tilted by a few

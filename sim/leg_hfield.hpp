@@ -1,16 +1,8 @@
 #pragma once
-// The leg's heightfield × foot-tile collision (docs/leg.md, "The foot's heightfield contacts"), included by
-// sim/leg_step.cpp only. MuJoCo 2.2.2 collides a convex mesh with a heightfield by running MPR
-// (libccd's ccdMPRPenetration) on every prism of the heightfield's cells under the mesh's bounding
-// box whose top reaches the mesh's lowest point. Under the foot's 6 cm tiles on the sandbox's 2 cm
-// sand that is ~210 MPR calls a collision pass, of which ~11 find a contact: a tile tilted by a few
-// degrees, or a crater that keeps the sand's relief, puts most prisms of its box below the tile or
-// beside it. This is the same computation in the same order — the same sub-grid, the same prisms,
-// the same MPR on the same support functions and numbers, the same contacts — except that a prism
-// that a separating plane shows to be more than kCullGap away from the tile is skipped instead of
-// handed to MPR, which would have found no contact there. Installed in mjCOLLISIONFUNC for
-// (heightfield, mesh) and active only on a thread inside a leg step that asks for it (a
-// thread_local switch); everywhere else the table's original function runs.
+// The leg's heightfield × foot-tile collision (docs/leg.md, "The foot's heightfield contacts";
+// sim/leg_hfield.cpp): MuJoCo 2.2.2's heightfield × mesh collision, the same contacts, without MPR
+// on the prisms a separating plane keeps from the tile. Installed in MuJoCo's collision table and
+// active only on a thread inside a Scope (a leg step); everywhere else MuJoCo's function runs.
 #include <mujoco/mujoco.h>
 
 #include <memory>
