@@ -521,7 +521,7 @@ bool LocusMapper::meetsSurfaceInGap(int r1, int r2, const Sample& s1, const Samp
   if (fit.n < 2) return true;
   // Scanlines past n0 towards the far side (the near surface) and past f0 towards the near side
   // (the far surface); a mixed pixel lies one scanline past each.
-  double t_near = mix ? 1.5 : 1.0, t_far = mix ? 1.0 : 0.5;
+  double t_near = mix ? 1.5 : 1.0, t_far = mix ? 1.0 : config_.far_gap_scanlines;
   // The far surface: last clean sample at f0, range a, the sample past it b; its inverse range
   // carried t scanlines past f0, linearly.
   const int f0 = far_mixed ? r1 - d : r1;
@@ -742,7 +742,7 @@ ElevationMap LocusMapper::map(const MapGrid& grid, long* lane_cells) const {
   ElevationMap out(grid);
   std::atomic<long> by_lanes{0};
   const Eigen::Vector3d v = Eigen::Vector3d::UnitZ();
-  const LaneIsa isa = config_.vectorized ? laneIsa() : LaneIsa::None;
+  const LaneIsa isa = config_.vectorized && !config_.bridge_sigma ? laneIsa() : LaneIsa::None;
   // Tasks of whole map rows, about 256 cells each: rows cost very different amounts (unseen rows
   // are cheap), small tasks keep both cores busy to the end, and tasks much smaller than that
   // cost more to hand out than they take (docs/benchmarks.md has the measurements). Rows are independent (each starts without a hint), so the map is

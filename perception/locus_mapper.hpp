@@ -36,6 +36,16 @@ struct LocusConfig {
   // are within what its robust costs absorb, while the rim cells it would lose carry the convex
   // features feature matching pairs (docs/matching.md).
   bool trust_edge_samples = false;
+  // σ for maps that bridge shallow occlusions (docs/locus.md, "Bridged occlusions"; the scenario's
+  // `shadows: gnc_bridge`): the roughness term taken on the returns' heights rather than their
+  // ranges, and a term for the ground a bracket may hide, from its links' jumps beyond the trend.
+  // The SIMD lanes do not compute it: with it on, every cell takes the scalar search.
+  bool bridge_sigma = false;
+  // How far the far surface of an occluding edge without a mixed pixel is carried back into the
+  // gap, in scanlines (docs/locus.md, "The gap at an occluding edge"): 0.5, where the edge's shadow
+  // ends on average; 1, the whole gap (no visible far-side cell is called shadow, fewer hidden
+  // ones are).
+  double far_gap_scanlines = 0.5;
   bool vectorized = true;  // maps: the common case in SIMD lanes (8 AVX-512 or 2 × 4 AVX2) where
                            // the CPU has them (the same bits as the scalar search; false: scalar)
 };
@@ -198,6 +208,9 @@ class LocusMapper {
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;
   double sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
                         const Eigen::Vector3d& b) const;
+  // σ with LocusConfig::bridge_sigma (sum_w2: the bilinear weights' Σw²; var_pixel: σ_p² at rho).
+  double bridgeSigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
+                              const Eigen::Vector3d& b, double sum_w2, double var_pixel) const;
   // A surface's course across scanlines: inverse range fitted by least squares against k, its
   // samples at scanlines first + k·step (k = 0…3, y0 the first's range, the rest read in sample s's
   // columns), up to the first missing one. inverseAt(t): the fit carried t scanlines before the
@@ -260,6 +273,13 @@ class LocusMapper {
   std::vector<double> vertical_inv_den_;  // Line::inv_den of the vertical direction (world z)
   std::vector<std::uint8_t> cell_flags_;  // per 2×2 cell: bits 0–3 edge pixels, bit 4 all returned
   std::vector<CellSigma> cell_sigma_;
+  // With LocusConfig::bridge_sigma, per 2×2 cell: the mean squared second difference of the
+  // returns' heights across and along scanlines, and the largest jump beyond the trend of the
+  // cell's links across and along them, m (range).
+  struct CellBridge {
+    double d2z_rows, d2z_cols, jump_rows, jump_cols;
+  };
+  std::vector<CellBridge> cell_bridge_;
   // above_min_[k][r][c]: the smallest range of the pixels in rows < r and columns [c, c + 2^k)
   // (no return counts as +∞), for clearAbove's band queries, in above_levels_ levels.
   std::vector<float> above_min_;

@@ -63,6 +63,13 @@ struct PixelTables {
   }
 };
 
+// The median of w[0..n), n ≥ 1 (sorted in place; n is small).
+inline double medianOf(double* w, int n) {
+  for (int i = 1; i < n; ++i)
+    for (int j = i; j > 0 && w[j] < w[j - 1]; --j) std::swap(w[j], w[j - 1]);
+  return n % 2 ? w[n / 2] : 0.5 * (w[n / 2 - 1] + w[n / 2]);
+}
+
 // The local surface normal (sensor frame) around the 2×2 cell at (r0, c0), from the widest
 // returned span across it in each image direction (wider spans average out range noise).
 Eigen::Vector3d localNormal(const PixelTables& px, int r0, int c0, const Eigen::Vector3d& up) {
@@ -124,6 +131,8 @@ LocusMapper::LocusMapper(const RangeImage& image, const SensorModel& sensor, con
     throw std::invalid_argument("LocusMapper: the range image needs at least 2x2 pixels");
   if (edges && (edges->rows() != rows_ || edges->cols() != cols_))
     throw std::invalid_argument("LocusMapper: the edge mask and the range image differ in size");
+  if (!(config.far_gap_scanlines >= 0 && config.far_gap_scanlines <= 1))
+    throw std::invalid_argument("LocusMapper: far_gap_scanlines must be in [0, 1]");
   phi0_ = image.phi[0];
   dphi_ = image.phi[0] - image.phi[1];
   theta0_ = image.theta[0];
@@ -226,6 +235,65 @@ LocusMapper::LocusMapper(const RangeImage& image, const SensorModel& sensor, con
         cs.d2_cols = config.roughness ? meanSecondDifference2(pixels, r, c, false) : kNaN;
       }
   });
+  if (!config.bridge_sigma) return;
+  // The inputs of bridge σ (docs/locus.md, "Bridged occlusions"), per 2×2 cell. Heights are the
+  // returns' world z (their component along up_); a cell's mean squared height second difference
+  // is over the same four differences as meanSecondDifference2's. A link's jump is its range
+  // difference's departure from the trend, the median of the four differences around it along
+  // its line (two either side): across scanlines only a far side farther than the trend counts
+  // (a surface turned towards the sensor hides nothing), along them either sign.
+  const auto height = [&](int r, int c) {
+    Eigen::Vector3d p;
+    return pixels.pixelPoint(r, c, p) ? p.dot(up_) : kNaN;
+  };
+  const auto range = [&](int r, int c) {
+    return r < 0 || c < 0 || r >= rows_ || c >= cols_ || !image.valid(r, c) ? kNaN : double(image.range(r, c));
+  };
+  const auto d2z = [&](int r, int c, bool across_rows) {
+    const int dr = across_rows ? 1 : 0, dc = across_rows ? 0 : 1;
+    const double d = height(r - dr, c - dc) - 2 * height(r, c) + height(r + dr, c + dc);
+    return d * d;  // NaN propagates: a missing pixel makes no difference
+  };
+  const auto meanD2z = [&](int r0, int c0, bool across_rows) {
+    double sum = 0;
+    int n = 0;
+    for (int side = 0; side < 2; ++side)
+      for (int centre = 0; centre < 2; ++centre) {
+        const double v = across_rows ? d2z(r0 + centre, c0 + side, true) : d2z(r0 + side, c0 + centre, false);
+        if (std::isnan(v)) continue;
+        sum += v;
+        ++n;
+      }
+    return n == 0 ? kNaN : sum / n;
+  };
+  // The jump of the link from (r, c) to the next pixel across scanlines (r + 1) or along them.
+  const auto jump = [&](int r, int c, bool across_rows) {
+    const int dr = across_rows ? 1 : 0, dc = across_rows ? 0 : 1;
+    // Across scanlines the difference is far minus near (row r is above row r + 1, farther).
+    const auto diff = [&](int k) {
+      const double a = range(r + k * dr, c + k * dc), b = range(r + (k + 1) * dr, c + (k + 1) * dc);
+      return across_rows ? a - b : b - a;
+    };
+    const double x = diff(0);
+    double w[4];
+    int n = 0;
+    for (const int k : {-2, -1, 1, 2})
+      if (const double v = diff(k); !std::isnan(v)) w[n++] = v;
+    if (std::isnan(x) || n == 0) return 0.0;
+    const double t = medianOf(w, n);
+    return across_rows ? std::max(0.0, x - t) : std::abs(x - t);
+  };
+  cell_bridge_.resize(cell_sigma_.size());
+  tbb::parallel_for(tbb::blocked_range<int>(0, rows_ - 1), [&](const tbb::blocked_range<int>& rows) {
+    for (int r = rows.begin(); r != rows.end(); ++r)
+      for (int c = 0; c + 1 < cols_; ++c) {
+        CellBridge& cb = cell_bridge_[cellIndex(r, c)];
+        cb.d2z_rows = config.roughness ? meanD2z(r, c, true) : kNaN;
+        cb.d2z_cols = config.roughness ? meanD2z(r, c, false) : kNaN;
+        cb.jump_rows = std::max(jump(r, c, true), jump(r, c + 1, true));
+        cb.jump_cols = std::max(jump(r, c, false), jump(r + 1, c, false));
+      }
+  });
 }
 
 // f = asin or atan as a quadratic Taylor polynomial about the middle of each of 4096 intervals of
@@ -262,6 +330,7 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   const double gr = 1 - fr, gc = 1 - fc;
   const double sum_w2 = (gr * gr + fr * fr) * (gc * gc + fc * fc);
   const double var_pixel = sensor_.rangeVariance(rho);
+  if (config_.bridge_sigma) return bridgeSigmaAlongLine(r0, c0, fr, fc, rho, p, b, sum_w2, var_pixel);
   const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
   const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
                        roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data() + kRoughnessSteps + 1);
@@ -269,6 +338,31 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   const Eigen::Vector3d& n = cs.normal;
   const double pn = (p.x() * n.x() + p.y() * n.y()) + p.z() * n.z(), bn = (b.x() * n.x() + b.y() * n.y()) + b.z() * n.z();
   return std::sqrt(var_rho) * std::abs(pn) / (rho * std::max(std::abs(bn), 0.05));
+}
+
+// σ with LocusConfig::bridge_sigma (docs/locus.md, "Bridged occlusions"). The pixels' noise is
+// carried to the line as in sigmaAlongLine. The roughness between pixels is taken on the returns'
+// heights: sigmaAlongLine's fBm model on D_z², the height second differences, less the noise's
+// 6σ_p²·d_z² (d_z the beam's vertical component), so that a bracket whose normal an occlusion
+// tilts does not shrink it. And a bracket whose link jumps beyond its trend by J (range) may hide
+// ground down to about J·|d_z| below the interpolation: with the edge anywhere in the bracket,
+// the interpolation at fraction f errs by f(1 − f)·(J·d_z)² in variance. J is taken less
+// 2·√2·σ_p, twice the noise of a difference of two pixels. A height error δz of the surface moves
+// the line's crossing by δz·(n·up)/(b·n).
+double LocusMapper::bridgeSigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
+                                         const Eigen::Vector3d& b, double sum_w2, double var_pixel) const {
+  const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
+  const CellBridge& cb = cell_bridge_[cellIndex(r0, c0)];
+  const Eigen::Vector3d& n = cs.normal;
+  const double abs_bn = std::max(std::abs(b.dot(n)), 0.05);
+  const double dz = p.dot(up_) / rho, var_z = var_pixel * dz * dz;
+  const double rough_z = roughnessVariance(cb.d2z_rows, fr, var_z, roughness_g_.data()) +
+                         roughnessVariance(cb.d2z_cols, fc, var_z, roughness_g_.data() + kRoughnessSteps + 1);
+  const double slack = 2 * std::sqrt(2 * var_pixel);
+  const double hr = std::max(0.0, cb.jump_rows - slack) * dz, hc = std::max(0.0, cb.jump_cols - slack) * dz;
+  const double hidden = fr * (1 - fr) * hr * hr + fc * (1 - fc) * hc * hc;
+  const double to_range = p.dot(n) / (rho * abs_bn), to_line = n.dot(up_) / abs_bn;
+  return std::sqrt(var_pixel * sum_w2 * to_range * to_range + (rough_z + hidden) * to_line * to_line);
 }
 
 }  // namespace ambler::perception

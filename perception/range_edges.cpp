@@ -16,6 +16,7 @@ namespace ambler::perception {
 namespace {
 
 constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr double kNaND = std::numeric_limits<double>::quiet_NaN();
 // Over-relaxation of the SOR sweeps (Blake & Zisserman's update f ← f − ω·(∂E/∂f)/T).
 constexpr float kOmega = 1.5f;
 // Below this many pixels a pass runs on one thread: TBB's scheduling would cost more than it saves.
@@ -317,6 +318,55 @@ void continueEdges(const Membrane& m, const GncConfig& config, RangeLinks& links
   }
 }
 
+// The median of w[0..n), n ≥ 1 (sorted in place; n is small).
+inline double medianOf(double* w, int n) {
+  for (int i = 1; i < n; ++i)
+    for (int j = i; j > 0 && w[j] < w[j - 1]; --j) std::swap(w[j], w[j - 1]);
+  return n % 2 ? w[n / 2] : 0.5 * (w[n / 2 - 1] + w[n / 2]);
+}
+
+// Unbreaks the links whose jump hides too little to matter (GncConfig::occlusion_depth_k,
+// docs/range_edges.md, "Shallow occlusions"). Along a link's line, the seven range differences
+// centred on it give its own, d, and the trend t, the median of the six others (a jump is one
+// outlier among them, a mixed pixel's two halves two). Visible ground between two samples spans
+// L = √(t² + (ρ·Δα)²) (along the ray the trend, across it the pixels' spacing) and meets the rays
+// at sin β = ρ·Δα/L, so a jump J = |d − t| beyond the trend (or |d + d' − 2t| with a neighbour d'
+// along the line) can hide J·sin β of depth below the surface the trend continues. That depth is
+// compared with what the ground itself departs from a straight line over L, σ_s·(L/L0)^H. Only
+// the image enters (no pose), so the edges of a scan stay those of every pose it is mapped at.
+void dropShallowOcclusions(const RangeImage& image, const GncConfig& config, RangeLinks& links) {
+  const int rows = image.rows(), cols = image.cols();
+  if (rows < 2 || cols < 2) return;
+  const double da_rows = std::abs(image.phi[1] - image.phi[0]), da_cols = std::abs(image.theta[1] - image.theta[0]);
+  auto rho = [&](int r, int c) {
+    return r < 0 || c < 0 || r >= rows || c >= cols || !image.valid(r, c) ? kNaND : double(image.range(r, c));
+  };
+  for (const bool down : {true, false}) {
+    Raster<std::uint8_t>& l = down ? links.down : links.right;
+    const Raster<std::uint8_t> found = l;
+    const int dr = down ? 1 : 0, dc = down ? 0 : 1;
+    const double da = down ? da_rows : da_cols;
+    for (int r = 0; r < rows; ++r)
+      for (int c = 0; c < cols; ++c) {
+        if (!found(r, c)) continue;
+        double d[7], w[6];
+        int n = 0;
+        for (int k = -3; k <= 3; ++k) {
+          d[k + 3] = rho(r + (k + 1) * dr, c + (k + 1) * dc) - rho(r + k * dr, c + k * dc);
+          if (k != 0 && !std::isnan(d[k + 3])) w[n++] = d[k + 3];
+        }
+        if (n < 2 || std::isnan(d[3])) continue;  // no trend to judge by: the link stays broken
+        const double t = medianOf(w, n);
+        double jump = std::abs(d[3] - t);
+        if (!std::isnan(d[2])) jump = std::max(jump, std::abs(d[2] + d[3] - 2 * t));
+        if (!std::isnan(d[4])) jump = std::max(jump, std::abs(d[3] + d[4] - 2 * t));
+        const double across = std::min(rho(r, c), rho(r + dr, c + dc)) * da, L = std::hypot(t, across);
+        const double relief = config.surface_sigma_m * std::pow(L / config.surface_scale_m, config.surface_hurst);
+        if (jump * across / L < config.occlusion_depth_k * relief) l(r, c) = 0;
+      }
+  }
+}
+
 void requireConfig(bool ok, const char* what) {
   if (!ok) throw std::invalid_argument(std::string("GncConfig: ") + what);
 }
@@ -328,6 +378,10 @@ RangeLinks detectBrokenLinks(const RangeImage& image, const SensorModel& sensor,
   requireConfig(config.h0 > 0 && std::isfinite(config.h0), "h0 must be positive");
   requireConfig(config.surface_sigma_m >= 0 && std::isfinite(config.surface_sigma_m),
                 "surface_sigma_m must be non-negative");
+  requireConfig(config.occlusion_depth_k >= 0 && std::isfinite(config.occlusion_depth_k),
+                "occlusion_depth_k must be non-negative");
+  requireConfig(config.surface_scale_m > 0 && std::isfinite(config.surface_scale_m), "surface_scale_m must be positive");
+  requireConfig(config.surface_hurst >= 0 && config.surface_hurst < 1, "surface_hurst must be in [0, 1)");
   requireConfig(config.sweeps >= 1, "sweeps must be at least 1");
   requireConfig(config.bridge_h >= 0 && std::isfinite(config.bridge_h), "bridge_h must be non-negative");
   requireConfig(config.bridge_span >= 1, "bridge_span must be at least 1");
@@ -386,6 +440,7 @@ RangeLinks detectBrokenLinks(const RangeImage& image, const SensorModel& sensor,
     for (int r = r0; r < r1; ++r) m.brokenLinks(r, t_break, &links.right(r, 0), &links.down(r, 0));
   });
   continueEdges(m, config, links);
+  if (config.occlusion_depth_k > 0) dropShallowOcclusions(image, config, links);
   return links;
 }
 

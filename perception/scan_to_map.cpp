@@ -4,6 +4,13 @@
 
 namespace ambler::perception {
 
+void applyShadowMethod(ShadowMethod m, GncConfig& gnc, LocusConfig& locus) {
+  if (m != ShadowMethod::GncBridge) return;
+  gnc.occlusion_depth_k = kBridgeDepthK;
+  locus.bridge_sigma = true;
+  locus.far_gap_scanlines = 1.0;
+}
+
 ScanMap scanToMap(const RangeImage& measured, const SensorModel& sensor, const Eigen::Isometry3d& T_WS,
                   const MapGrid& grid, const ScanToMapConfig& config) {
   validate(sensor);
@@ -15,7 +22,7 @@ ScanMap scanToMap(const RangeImage& measured, const SensorModel& sensor, const E
   out.image.T_WS = T_WS;
   out.sensor = sensor;
   if (sensor.ambiguity_m > 0) out.unwrapped = unwrapRanges(out.image, sensor);
-  if (config.shadows == ShadowMethod::Gnc) out.edges = detectRangeEdges(out.image, sensor, config.gnc);
+  if (config.shadows != ShadowMethod::None) out.edges = detectRangeEdges(out.image, sensor, config.gnc);
   const LocusMapper mapper(out.image, sensor, out.edges ? &*out.edges : nullptr, config.locus, grid.T_WM);
   out.map = mapper.map(grid);
   return out;

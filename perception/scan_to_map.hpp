@@ -16,9 +16,17 @@ namespace ambler::perception {
 
 // How range shadows are found.
 enum class ShadowMethod : std::uint8_t {
-  None,  // no edge detection: every crossing is taken as a surface
-  Gnc,   // occluding edges by graduated non-convexity (range_edges.hpp)
+  None,       // no edge detection: every crossing is taken as a surface
+  Gnc,        // occluding edges by graduated non-convexity (range_edges.hpp)
+  GncBridge,  // the same edges less the occlusions too shallow to matter, which are bridged with a σ
+              // that covers what they may hide (docs/range_edges.md, "Shallow occlusions")
 };
+
+// The edge detector's and the mapper's settings for a shadow method: Gnc leaves both as given;
+// GncBridge sets GncConfig::occlusion_depth_k = kBridgeDepthK, LocusConfig::bridge_sigma and
+// far_gap_scanlines = 1.
+constexpr double kBridgeDepthK = 3.0;
+void applyShadowMethod(ShadowMethod m, GncConfig& gnc, LocusConfig& locus);
 
 struct ScanToMapConfig {
   ShadowMethod shadows = ShadowMethod::Gnc;
@@ -31,7 +39,7 @@ struct ScanMap {
   RangeImage image;                              // the measured image after unwrapping, at the pose used
   SensorModel sensor;                            // the model it was taken with
   long unwrapped = 0;                            // pixels moved by a multiple of the interval
-  std::optional<Raster<std::uint8_t>> edges;     // the edge mask (ShadowMethod::Gnc)
+  std::optional<Raster<std::uint8_t>> edges;     // the edge mask (GNC, with or without bridging)
   ElevationMap map;                              // on the asked grid, in its frame
 };
 

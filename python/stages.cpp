@@ -345,7 +345,21 @@ void bindStages(py::module_& m) {
         const eval::MapSpec& spec = mapSpec(*w.scenario, "World.truth_map");
         auto map = std::make_shared<perception::ElevationMap>(w.state->truth->elevation(spec.grid()));
         return PyMap{map, map.get()};
-      }, "The ground truth on the scenario's map grid (known everywhere the terrain is, sigma 0)");
+      }, "The ground truth on the scenario's map grid (known everywhere the terrain is, sigma 0)")
+      .def("visibility", [](const PyWorld& w, const py::object& sensor_pose) {
+        const eval::MapSpec& spec = mapSpec(*w.scenario, "World.visibility");
+        const Eigen::Isometry3d T = poseFromArray(sensor_pose, "World.visibility: sensor_pose");
+        perception::Raster<std::uint8_t> vis;
+        {
+          py::gil_scoped_release release;
+          vis = w.state->truth->visibility(w.state->truth->elevation(spec.grid()), T, w.scenario->sensor);
+        }
+        py::array_t<std::uint8_t> a({py::ssize_t(vis.rows()), py::ssize_t(vis.cols())});
+        std::copy(vis.data(), vis.data() + vis.size(), a.mutable_data());
+        return a;
+      }, py::arg("sensor_pose"),
+      "What the scenario's sensor at SENSOR_POSE (4 x 4, T_WS) sees of the true surface at each cell centre of the "
+      "map grid, as the map metrics score it: uint8, 0 out of view, 1 visible, 2 hidden (a range shadow)");
 
   m.def("world", &makeWorld, py::arg("scenario"),
         "The scenario's world as the world stage builds it (ambler.ScenarioError for a view under the terrain)");

@@ -317,8 +317,10 @@ MapSpec readMap(const Reader& reader, const YAML::Node& node) {
   checkGridSize(reader, f.pathOf("cell_m"), std::ceil((m.x_m[1] - m.x_m[0]) / m.cell_m),
                 std::ceil((m.y_m[1] - m.y_m[0]) / m.cell_m));
   m.epsilon_rad = f.number("epsilon_rad", kPositive, m.epsilon_rad);
-  m.shadows = f.choice("shadows", {"gnc", "none"}, shadowsName(m.shadows)) == "gnc" ? perception::ShadowMethod::Gnc
-                                                                                     : perception::ShadowMethod::None;
+  const std::string shadows = f.choice("shadows", {"gnc", "gnc_bridge", "none"}, shadowsName(m.shadows));
+  m.shadows = shadows == "gnc" ? perception::ShadowMethod::Gnc
+              : shadows == "gnc_bridge" ? perception::ShadowMethod::GncBridge
+                                        : perception::ShadowMethod::None;
   m.baseline = f.choice("baseline", {"cartesian", "none"}, baselineName(m.baseline)) == "cartesian" ? Baseline::Cartesian
                                                                                                    : Baseline::None;
   return m;
@@ -532,7 +534,9 @@ const char* mergePosesName(MergePoses p) { return p == MergePoses::Matched ? "ma
 perception::MapGrid MergeSpec::grid() const {
   return perception::MapGrid::covering(x_m[0], x_m[1], y_m[0], y_m[1], cell_m);
 }
-const char* shadowsName(perception::ShadowMethod m) { return m == perception::ShadowMethod::Gnc ? "gnc" : "none"; }
+const char* shadowsName(perception::ShadowMethod m) {
+  return m == perception::ShadowMethod::Gnc ? "gnc" : m == perception::ShadowMethod::GncBridge ? "gnc_bridge" : "none";
+}
 const char* baselineName(Baseline b) { return b == Baseline::Cartesian ? "cartesian" : "none"; }
 const std::vector<MatchMethod>& matchMethods() {
   static const std::vector<MatchMethod> kNamed{
@@ -618,6 +622,7 @@ perception::ScanToMapConfig MapSpec::scanToMapConfig() const {
   perception::ScanToMapConfig c;
   c.shadows = shadows;
   c.locus.epsilon_rad = epsilon_rad;
+  perception::applyShadowMethod(shadows, c.gnc, c.locus);
   return c;
 }
 

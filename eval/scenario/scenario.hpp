@@ -44,7 +44,7 @@ struct MapSpec {
   Eigen::Vector2d x_m{-5.0, 5.0};
   Eigen::Vector2d y_m{-3.0, 8.0};
   double epsilon_rad = 1.0e-5;
-  perception::ShadowMethod shadows = perception::ShadowMethod::Gnc;  // gnc | none
+  perception::ShadowMethod shadows = perception::ShadowMethod::Gnc;  // gnc | gnc_bridge | none
   Baseline baseline = Baseline::Cartesian;                           // cartesian | none
 
   // The grid of the map region (in the world frame; in a traverse, in each stop's heading frame:

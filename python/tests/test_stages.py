@@ -81,6 +81,22 @@ def test_world_heights_are_the_truth_maps(demo):
     assert (truth.state == 1).all() and (truth.sigma == 0).all()
 
 
+def test_visibility_scores_the_views_as_the_runs_metrics(demo):
+    """World.visibility is what the map metrics score against: from it, each view map's coverage,
+    shadow precision and recall and its counts of visible and hidden cells are metrics.json's."""
+    _, run, world, _, _ = demo
+    for k in range(world.views):
+        vis = world.visibility(world.view_pose(k))
+        m, metrics = run.maps[f"view_{k}"], run.metrics["map"][k]
+        assert vis.dtype == np.uint8 and vis.shape == m.state.shape and set(np.unique(vis)) <= {0, 1, 2}
+        visible, hidden = vis == 1, vis == 2
+        known, shadow = m.state == 1, m.state == 2
+        assert (visible.sum(), hidden.sum(), shadow.sum()) == (metrics["visible"], metrics["hidden"], metrics["shadow"])
+        assert (known & visible).sum() / visible.sum() == pytest.approx(metrics["coverage"], rel=1e-12)
+        assert (shadow & hidden).sum() / shadow.sum() == pytest.approx(metrics["shadow_precision"], rel=1e-12)
+        assert (shadow & hidden).sum() / hidden.sum() == pytest.approx(metrics["shadow_recall"], rel=1e-12)
+
+
 def test_map_scan_gives_the_runs_view_maps(demo):
     _, run, world, _, views = demo
     for k, v in enumerate(views):
