@@ -37,8 +37,8 @@ struct LocusConfig {
   // features feature matching pairs (docs/matching.md).
   bool trust_edge_samples = false;
   // σ for maps that bridge shallow occlusions (docs/locus.md, "Bridged occlusions"; the scenario's
-  // `shadows: gnc_bridge`): the roughness term taken on the returns' heights rather than their
-  // ranges, and a term for the ground a bracket may hide, from its links' jumps beyond the trend.
+  // `shadows: gnc_bridge`): with a term for the ground a bracket may hide, from its links' jumps
+  // beyond the trend.
   // The SIMD lanes do not compute it: with it on, every cell takes the scalar search.
   bool bridge_sigma = false;
   // How far the far surface of an occluding edge without a mixed pixel is carried back into the
@@ -274,8 +274,8 @@ class LocusMapper {
   std::vector<std::uint8_t> cell_flags_;  // per 2×2 cell: bits 0–3 edge pixels, bit 4 all returned
   std::vector<CellSigma> cell_sigma_;
   // With LocusConfig::bridge_sigma, per 2×2 cell: the mean squared second difference of the
-  // returns' heights across and along scanlines, and the largest jump beyond the trend of the
-  // cell's links across and along them, m (range).
+  // returns' heights across and along scanlines (m²), and the largest jump beyond the trend of the
+  // cell's links across and along them (m of range).
   struct CellBridge {
     double d2z_rows, d2z_cols, jump_rows, jump_cols;
   };

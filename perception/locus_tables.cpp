@@ -246,25 +246,22 @@ LocusMapper::LocusMapper(const RangeImage& image, const SensorModel& sensor, con
     Eigen::Vector3d p;
     return pixels.pixelPoint(r, c, p) ? p.dot(up_) : kNaN;
   };
-  const auto range = [&](int r, int c) {
-    return r < 0 || c < 0 || r >= rows_ || c >= cols_ || !image.valid(r, c) ? kNaN : double(image.range(r, c));
-  };
-  const auto d2z = [&](int r, int c, bool across_rows) {
-    const int dr = across_rows ? 1 : 0, dc = across_rows ? 0 : 1;
-    const double d = height(r - dr, c - dc) - 2 * height(r, c) + height(r + dr, c + dc);
-    return d * d;  // NaN propagates: a missing pixel makes no difference
-  };
   const auto meanD2z = [&](int r0, int c0, bool across_rows) {
+    const int dr = across_rows ? 1 : 0, dc = across_rows ? 0 : 1;
     double sum = 0;
     int n = 0;
     for (int side = 0; side < 2; ++side)
       for (int centre = 0; centre < 2; ++centre) {
-        const double v = across_rows ? d2z(r0 + centre, c0 + side, true) : d2z(r0 + side, c0 + centre, false);
-        if (std::isnan(v)) continue;
-        sum += v;
+        const int r = across_rows ? r0 + centre : r0 + side, c = across_rows ? c0 + side : c0 + centre;
+        const double d = height(r - dr, c - dc) - 2 * height(r, c) + height(r + dr, c + dc);
+        if (std::isnan(d)) continue;  // a missing pixel makes no difference
+        sum += d * d;
         ++n;
       }
     return n == 0 ? kNaN : sum / n;
+  };
+  const auto range = [&](int r, int c) {
+    return r < 0 || c < 0 || r >= rows_ || c >= cols_ || !image.valid(r, c) ? kNaN : double(image.range(r, c));
   };
   // The jump of the link from (r, c) to the next pixel across scanlines (r + 1) or along them.
   const auto jump = [&](int r, int c, bool across_rows) {
@@ -340,29 +337,34 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   return std::sqrt(var_rho) * std::abs(pn) / (rho * std::max(std::abs(bn), 0.05));
 }
 
-// σ with LocusConfig::bridge_sigma (docs/locus.md, "Bridged occlusions"). The pixels' noise is
-// carried to the line as in sigmaAlongLine. The roughness between pixels is taken on the returns'
-// heights: sigmaAlongLine's fBm model on D_z², the height second differences, less the noise's
-// 6σ_p²·d_z² (d_z the beam's vertical component), so that a bracket whose normal an occlusion
-// tilts does not shrink it. And a bracket whose link jumps beyond its trend by J (range) may hide
-// ground down to about J·|d_z| below the interpolation: with the edge anywhere in the bracket,
-// the interpolation at fraction f errs by f(1 − f)·(J·d_z)² in variance. J is taken less
-// 2·√2·σ_p, twice the noise of a difference of two pixels. A height error δz of the surface moves
-// the line's crossing by δz·(n·up)/(b·n).
+// σ with LocusConfig::bridge_sigma (docs/locus.md, "Bridged occlusions"). The pixels' noise as in
+// sigmaAlongLine. The roughness between pixels: the larger of sigmaAlongLine's term (the fBm model
+// on the ranges' second differences, carried to the line through the local normal) and the same
+// model on the returns' heights (less the noise's 6σ_p²·d_z², d_z the beam's vertical component),
+// carried as a height error: where an occlusion the map bridges tilts the local normal towards the
+// rays, the first shrinks and the second does not; on a plane the ranges' curvature, which
+// interpolation in range errs by, shows in the first only. And a bracket whose link jumps beyond
+// its trend by J (range) may hide ground down to about J·|d_z| below the interpolation: with the
+// edge anywhere in the bracket, the interpolation at fraction f errs by f(1 − f)·(J·d_z)² in
+// variance. J is taken less 2·√2·σ_p, twice the noise of a difference of two pixels. A height error
+// δz of the surface moves the line's crossing by δz·(n·up)/(b·n).
 double LocusMapper::bridgeSigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
                                          const Eigen::Vector3d& b, double sum_w2, double var_pixel) const {
   const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
   const CellBridge& cb = cell_bridge_[cellIndex(r0, c0)];
   const Eigen::Vector3d& n = cs.normal;
   const double abs_bn = std::max(std::abs(b.dot(n)), 0.05);
+  const double to_range = p.dot(n) / (rho * abs_bn), to_line = n.dot(up_) / abs_bn;
   const double dz = p.dot(up_) / rho, var_z = var_pixel * dz * dz;
+  const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
+                       roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data() + kRoughnessSteps + 1);
   const double rough_z = roughnessVariance(cb.d2z_rows, fr, var_z, roughness_g_.data()) +
                          roughnessVariance(cb.d2z_cols, fc, var_z, roughness_g_.data() + kRoughnessSteps + 1);
   const double slack = 2 * std::sqrt(2 * var_pixel);
   const double hr = std::max(0.0, cb.jump_rows - slack) * dz, hc = std::max(0.0, cb.jump_cols - slack) * dz;
   const double hidden = fr * (1 - fr) * hr * hr + fc * (1 - fc) * hc * hc;
-  const double to_range = p.dot(n) / (rho * abs_bn), to_line = n.dot(up_) / abs_bn;
-  return std::sqrt(var_pixel * sum_w2 * to_range * to_range + (rough_z + hidden) * to_line * to_line);
+  const double roughness = std::max(rough * to_range * to_range, rough_z * to_line * to_line);
+  return std::sqrt(var_pixel * sum_w2 * to_range * to_range + roughness + hidden * to_line * to_line);
 }
 
 }  // namespace ambler::perception

@@ -5,10 +5,12 @@
 
 #include <cmath>
 #include <cstring>
+#include <string>
 #include <limits>
 #include <numbers>
 
 #include "perception/locus_mapper.hpp"
+#include "perception/range_edges.hpp"
 #include "synthetic.hpp"
 
 namespace ambler::perception {
@@ -295,6 +297,64 @@ TEST(LocusMapper, LanesHandBackWhatTheyCannotFinish) {
       if (LocusMapper::laneIsa() != LaneIsa::None) {
         EXPECT_GT(by_lanes, known / 3);
       }
+    }
+  }
+}
+
+// Bridge σ (LocusConfig::bridge_sigma, docs/locus.md, "Bridged occlusions") against the ground
+// truth of a lip too shallow to be an occlusion (range_edges' ShallowOcclusionsAreBridgedDeepOnesKept:
+// 0.6 times what the gnc_bridge rule keeps, so the edge detector with the rule finds no edge). Seen
+// from 3 m, the ray past a lip at y0 lands a drop D lower at y0·(3 + D)/3: the far ground between
+// is hidden, and the map bridges it from the lip to the far ground. Two sensors: noise-free, and
+// the ERIM's 7.62 cm counts without noise (whole counts: the staircase the sensor reports). With
+// bridge σ every hidden cell the map calls known is within 3σ of the truth, and so is the visible
+// ground away from the lip. The negative control: with plain σ the counts' staircase hides the
+// lip's jump from the roughness term, and bridged cells lie beyond 3σ.
+TEST(LocusMapper, BridgeSigmaCoversTheGroundAShallowOcclusionHides) {
+  const double h = 3, y0 = 9, dphi = 30 * kDeg / 64;
+  GncConfig gnc;
+  gnc.occlusion_depth_k = 3;
+  const double rho = std::hypot(y0, h), L = rho * rho * dphi / h;
+  const double drop = 0.6 * gnc.occlusion_depth_k * gnc.surface_sigma_m * std::pow(L / gnc.surface_scale_m, gnc.surface_hurst);
+  const auto hiddenAt = [&](double y) { return y > y0 && y < y0 * (h + drop) / h; };
+  const auto truthAt = [&](double y) { return y < y0 ? 0.0 : -drop; };
+  for (const double q : {0.0, 0.0762}) {
+    SensorModel sensor = noiseFree();
+    sensor.quantization_m = q;
+    auto img = RangeImage::blank(64, 256, 30 * kDeg, 80 * kDeg);
+    img.T_WS = sensorPose({0, 0, h}, {0, -25 * kDeg, 0});
+    const Eigen::Vector3d o = img.T_WS.translation();
+    for (int r = 0; r < img.rows(); ++r)
+      for (int c = 0; c < img.cols(); ++c) {
+        const Eigen::Vector3d d = img.T_WS.linear() * beamDirection(img.phi[r], img.theta[c]);
+        const double t_near = test::rangeToPlane(o, d, {0, 0, 0}), t_far = test::rangeToPlane(o, d, {0, 0, -drop});
+        const double t = o.y() + t_near * d.y() < y0 ? t_near : t_far;
+        img.range(r, c) = !(t <= 20) ? std::numeric_limits<float>::quiet_NaN() : float(q > 0 ? q * std::nearbyint(t / q) : t);
+      }
+    const auto edges = detectRangeEdges(img, sensor, gnc);
+    const auto grid = MapGrid::covering(-2, 2, y0 - 1, y0 + 1.5, 0.1);
+    for (const bool bridge : {false, true}) {
+      LocusConfig config;
+      config.bridge_sigma = bridge;
+      const ElevationMap map = LocusMapper(img, sensor, &edges, config).map(grid);
+      int hidden_known = 0, hidden_beyond = 0, visible_known = 0, visible_beyond = 0;
+      for (int r = 0; r < grid.rows; ++r)
+        for (int c = 0; c < grid.cols; ++c) {
+          if (map.stateAt(r, c) != CellState::Known) continue;
+          const double y = grid.center(r, c).y(), err = std::abs(map.elevation()(r, c) - truthAt(y));
+          const bool beyond = err > 3 * map.sigma()(r, c);
+          if (hiddenAt(y)) {
+            ++hidden_known, hidden_beyond += beyond;
+          } else if (std::abs(y - y0) > 0.3) {  // visible ground away from the lip's bracket
+            ++visible_known, visible_beyond += beyond;
+          }
+        }
+      SCOPED_TRACE(std::string(bridge ? "bridge sigma" : "plain sigma") + ", counts of " + std::to_string(q) + " m");
+      ASSERT_GT(hidden_known, 20) << "the hidden band is bridged, not left out";
+      ASSERT_GT(visible_known, 500);
+      EXPECT_EQ(visible_beyond, 0);
+      if (bridge) EXPECT_EQ(hidden_beyond, 0);
+      if (!bridge && q > 0) EXPECT_GT(hidden_beyond, 0) << "the negative control: plain sigma misses the bridge";
     }
   }
 }

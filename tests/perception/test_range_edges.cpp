@@ -339,6 +339,52 @@ INSTANTIATE_TEST_SUITE_P(Ranges, LedgeDrop,
                                            LedgeCase{9, 20, true, true},
                                            LedgeCase{14, -25, true, true}));
 
+// Shallow occlusions (GncConfig::occlusion_depth_k, docs/range_edges.md, "Shallow occlusions").
+// A lip at distance y0 seen from h = 3 m: the ray past it lands a drop D lower, D/sin δ further
+// along the ray (sin δ = h/ρ), so the jump beyond the ground's trend hides D/sin δ·sin β = D of
+// depth (sin β = sin δ on level ground). Visible ground spans L = ρ²·Δφ/h between two scanlines,
+// and departs from a straight line by σ_s·(L/L0)^H over it. With the rule at k = 3 (the
+// scenario's gnc_bridge), a drop of 0.6 times k·σ_s·(L/L0)^H is bridged and one of 1.7 times is
+// kept; with the rule off the membrane breaks both (the noise-free sensor: σ is σ_s alone, and
+// even the shallow drop's jump is over twice h0·σ_s), so the rule is what decides.
+TEST(RangeEdges, ShallowOcclusionsAreBridgedDeepOnesKept) {
+  SensorModel ideal;
+  ideal.noise_k = 0, ideal.quantization_m = 0;
+  GncConfig off, on;
+  on.occlusion_depth_k = 3.0;
+  const View v;  // 3 m up, pitched −25°, 64 scanlines over 30°
+  const double dphi = v.fov_v / v.rows;
+  // The fraction of the lip's columns with an edge pixel within a row of the jump.
+  const auto lipFound = [](const Rendered& s, const Raster<std::uint8_t>& edges) {
+    int columns = 0, found = 0;
+    for (int c = 0; c < s.image.cols(); ++c)
+      for (int r = 0; r + 1 < s.image.rows(); ++r)
+        if (s.surface(r, c) == 1 && s.surface(r + 1, c) == 0) {
+          ++columns;
+          bool hit = false;
+          for (int i = std::max(0, r - 1); i <= std::min(s.image.rows() - 1, r + 2); ++i) hit = hit || edges(i, c);
+          found += hit;
+        }
+    return columns > 100 ? double(found) / columns : -1.0;
+  };
+  for (const double y0 : {9.0, 12.0}) {
+    const double rho = std::hypot(y0, v.xyz.z()), L = rho * rho * dphi / v.xyz.z();
+    const double relief = on.surface_sigma_m * std::pow(L / on.surface_scale_m, on.surface_hurst);
+    for (const double f : {0.6, 1.7}) {
+      const double drop = f * on.occlusion_depth_k * relief;
+      const Rendered s = render(ledgeScene(y0, 0.0, -drop), v);
+      SCOPED_TRACE("lip at " + std::to_string(y0) + " m, drop " + std::to_string(drop) + " m");
+      EXPECT_GE(lipFound(s, detectRangeEdges(s.image, ideal, off)), 0.95);
+      const Raster<std::uint8_t> edges = detectRangeEdges(s.image, ideal, on);
+      if (f < 1) {
+        EXPECT_EQ((edges.array() != 0).count(), 0) << "a drop shallower than the ground's relief is bridged";
+      } else {
+        EXPECT_GE(lipFound(s, edges), 0.95) << "a deeper drop stays an occlusion";
+      }
+    }
+  }
+}
+
 // The same 0.4 m step seen from below: the wall faces the sensor, the range is continuous (a
 // crease, no jump) and nothing is hidden, so there is no occluding edge.
 TEST(RangeEdges, StepUpFacingTheSensorIsNoEdge) {
@@ -493,6 +539,9 @@ TEST(RangeEdges, RejectsBadConfig) {
       [](GncConfig& c) { c.bridge_h = -1; },
       [](GncConfig& c) { c.bridge_span = 0; },
       [](GncConfig& c) { c.grow_h = std::numeric_limits<double>::quiet_NaN(); },
+      [](GncConfig& c) { c.occlusion_depth_k = -1; },
+      [](GncConfig& c) { c.surface_scale_m = 0; },
+      [](GncConfig& c) { c.surface_hurst = 1; },
   };
   for (std::size_t i = 0; i < breakers.size(); ++i) {
     GncConfig bad;
