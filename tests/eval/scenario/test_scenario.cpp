@@ -327,6 +327,19 @@ TEST(ScenarioDefaults, OtherDefaultsAreTheDocumentedOnes) {
   EXPECT_EQ(m.map->epsilon_rad, 1.0e-5);
   EXPECT_EQ(m.map->shadows, perception::ShadowMethod::Gnc);
   EXPECT_EQ(m.map->baseline, Baseline::Cartesian);
+  // gnc leaves the detector's and the mapper's defaults; gnc_bridge sets its three settings.
+  const perception::ScanToMapConfig plain = m.map->scanToMapConfig();
+  EXPECT_EQ(plain.gnc.occlusion_depth_k, 0.0);
+  EXPECT_FALSE(plain.locus.bridge_sigma);
+  EXPECT_EQ(plain.locus.far_gap_scanlines, 0.5);
+  const Scenario b = parseScenario(kMinimal + "map: {shadows: gnc_bridge}\n", kFile);
+  EXPECT_EQ(b.map->shadows, perception::ShadowMethod::GncBridge);
+  const perception::ScanToMapConfig bridged = b.map->scanToMapConfig();
+  EXPECT_EQ(bridged.shadows, perception::ShadowMethod::GncBridge);
+  EXPECT_EQ(bridged.gnc.occlusion_depth_k, perception::kBridgeDepthK);
+  EXPECT_TRUE(bridged.locus.bridge_sigma);
+  EXPECT_EQ(bridged.locus.far_gap_scanlines, 1.0);
+  EXPECT_TRUE(locusConfig(b).bridge_sigma) << "the match and merge stages map with the same σ";
 
   const Scenario r = parseScenario(
       "name: t\nterrain: {kind: mars, rocks: {}, craters: {}}\nviews: [{xyz_m: [0, 0, 1]}]\n",
@@ -626,7 +639,7 @@ TEST(ScenarioErrors, WrongTypes) {
   expectError(kMinimal + "sensor: [64, 256]\n", "sensor", "expected a mapping, got a list of 2");
   expectError(kMinimal + "sensor:\n", "sensor", "expected a mapping, got nothing");
   expectError(kMinimal + "map: {shadows: yes}\n", "map.shadows",
-              "expected one of gnc, none, got 'yes'");
+              "expected one of gnc, gnc_bridge, none, got 'yes'");
   expectError("name: t\nterrain: {kind: fractl}\nviews: [{xyz_m: [0, 0, 1]}]\n", "terrain.kind",
               "expected one of plane, fractal, sinusoid, steps, mars, mjcf, dem, got 'fractl' (did you "
               "mean fractal?)");
