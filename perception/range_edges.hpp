@@ -25,12 +25,12 @@ struct GncConfig {
   // noise-free sensor does not break links at every pebble (docs/range_edges.md).
   double surface_sigma_m = 0.02;
   // Occlusions too shallow to matter (docs/range_edges.md, "Shallow occlusions"): a broken link
-  // stays broken only where the height it can hide, |Δρ − trend|·|d_z| (its jump beyond the trend
-  // of the links along its line, times the beam's vertical component in the world; over the link
-  // alone or with a neighbour, as a mixed pixel splits a jump), exceeds occlusion_depth_k times
-  // the ground's own departure from a straight line over the gap, surface_sigma_m·(L/
-  // surface_scale_m)^surface_hurst (fBm), L the ground visible ground would span there. 0: off
-  // (every link the membrane breaks stays broken).
+  // stays broken only where the depth it can hide, J·sin β (J its jump beyond the trend of the
+  // links along its line, over the link alone or with a neighbour, as a mixed pixel splits a jump;
+  // β the angle at which that trend meets the rays), exceeds occlusion_depth_k times the ground's
+  // own departure from a straight line over the gap, surface_sigma_m·(L/surface_scale_m)^
+  // surface_hurst (fBm), L the ground visible ground would span there. 0: off (every link the
+  // membrane breaks stays broken).
   double occlusion_depth_k = 0.0;
   double surface_scale_m = 0.1;
   double surface_hurst = 0.7;
