@@ -4,13 +4,6 @@
 
 namespace ambler::perception {
 
-void applyShadowMethod(ShadowMethod m, GncConfig& gnc, LocusConfig& locus) {
-  if (m != ShadowMethod::GncBridge) return;
-  gnc.occlusion_depth_k = kBridgeDepthK;
-  locus.bridge_sigma = true;
-  locus.far_gap_scanlines = 1.0;
-}
-
 ScanMap scanToMap(const RangeImage& measured, const SensorModel& sensor, const Eigen::Isometry3d& T_WS,
                   const MapGrid& grid, const ScanToMapConfig& config) {
   validate(sensor);

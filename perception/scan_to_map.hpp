@@ -25,8 +25,14 @@ enum class ShadowMethod : std::uint8_t {
 // The edge detector's and the mapper's settings for a shadow method: Gnc leaves both as given;
 // GncBridge sets GncConfig::occlusion_depth_k = kBridgeDepthK, LocusConfig::bridge_sigma and
 // far_gap_scanlines = 1.
+// (Inline: the scenario reader calls it, and links no perception code.)
 constexpr double kBridgeDepthK = 3.0;
-void applyShadowMethod(ShadowMethod m, GncConfig& gnc, LocusConfig& locus);
+inline void applyShadowMethod(ShadowMethod m, GncConfig& gnc, LocusConfig& locus) {
+  if (m != ShadowMethod::GncBridge) return;
+  gnc.occlusion_depth_k = kBridgeDepthK;
+  locus.bridge_sigma = true;
+  locus.far_gap_scanlines = 1.0;
+}
 
 struct ScanToMapConfig {
   ShadowMethod shadows = ShadowMethod::Gnc;
