@@ -208,9 +208,10 @@ class LocusMapper {
   LocusSample atPhi(const Line& l, int r_ref, double phi) const;
   double sigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
                         const Eigen::Vector3d& b) const;
-  // σ with LocusConfig::bridge_sigma (sum_w2: the bilinear weights' Σw²; var_pixel: σ_p² at rho).
+  // σ with LocusConfig::bridge_sigma (sum_w2: the bilinear weights' Σw²; var_pixel: σ_p² at rho;
+  // rough: sigmaAlongLine's roughness variance, in range).
   double bridgeSigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
-                              const Eigen::Vector3d& b, double sum_w2, double var_pixel) const;
+                              const Eigen::Vector3d& b, double sum_w2, double var_pixel, double rough) const;
   // A surface's course across scanlines: inverse range fitted by least squares against k, its
   // samples at scanlines first + k·step (k = 0…3, y0 the first's range, the rest read in sample s's
   // columns), up to the first missing one. inverseAt(t): the fit carried t scanlines before the

@@ -327,10 +327,10 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
   const double gr = 1 - fr, gc = 1 - fc;
   const double sum_w2 = (gr * gr + fr * fr) * (gc * gc + fc * fc);
   const double var_pixel = sensor_.rangeVariance(rho);
-  if (config_.bridge_sigma) return bridgeSigmaAlongLine(r0, c0, fr, fc, rho, p, b, sum_w2, var_pixel);
   const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
   const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
                        roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data() + kRoughnessSteps + 1);
+  if (config_.bridge_sigma) return bridgeSigmaAlongLine(r0, c0, fr, fc, rho, p, b, sum_w2, var_pixel, rough);
   const double var_rho = var_pixel * sum_w2 + rough;
   const Eigen::Vector3d& n = cs.normal;
   const double pn = (p.x() * n.x() + p.y() * n.y()) + p.z() * n.z(), bn = (b.x() * n.x() + b.y() * n.y()) + b.z() * n.z();
@@ -349,15 +349,12 @@ double LocusMapper::sigmaAlongLine(int r0, int c0, double fr, double fc, double 
 // variance. J is taken less 2·√2·σ_p, twice the noise of a difference of two pixels. A height error
 // δz of the surface moves the line's crossing by δz·(n·up)/(b·n).
 double LocusMapper::bridgeSigmaAlongLine(int r0, int c0, double fr, double fc, double rho, const Eigen::Vector3d& p,
-                                         const Eigen::Vector3d& b, double sum_w2, double var_pixel) const {
-  const CellSigma& cs = cell_sigma_[cellIndex(r0, c0)];
+                                         const Eigen::Vector3d& b, double sum_w2, double var_pixel, double rough) const {
+  const Eigen::Vector3d& n = cell_sigma_[cellIndex(r0, c0)].normal;
   const CellBridge& cb = cell_bridge_[cellIndex(r0, c0)];
-  const Eigen::Vector3d& n = cs.normal;
   const double abs_bn = std::max(std::abs(b.dot(n)), 0.05);
   const double to_range = p.dot(n) / (rho * abs_bn), to_line = n.dot(up_) / abs_bn;
   const double dz = p.dot(up_) / rho, var_z = var_pixel * dz * dz;
-  const double rough = roughnessVariance(cs.d2_rows, fr, var_pixel, roughness_g_.data()) +
-                       roughnessVariance(cs.d2_cols, fc, var_pixel, roughness_g_.data() + kRoughnessSteps + 1);
   const double rough_z = roughnessVariance(cb.d2z_rows, fr, var_z, roughness_g_.data()) +
                          roughnessVariance(cb.d2z_cols, fc, var_z, roughness_g_.data() + kRoughnessSteps + 1);
   const double slack = 2 * std::sqrt(2 * var_pixel);

@@ -5,9 +5,9 @@
 
 #include <cmath>
 #include <cstring>
-#include <string>
 #include <limits>
 #include <numbers>
+#include <string>
 
 #include "perception/locus_mapper.hpp"
 #include "perception/range_edges.hpp"
