@@ -527,6 +527,9 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
     c = scale(e);
     if (c > 0) e = sumLines(lines, c);
     if (level == 0) record(res, e);
+    // A step's largest motion of a line point: its translation plus its rotation at the map's half
+    // diagonal.
+    const auto motion = [&](const PoseVector& d) { return d.tail<3>().norm() + d.head<3>().norm() * half_diagonal; };
     double lambda = 1e-3;
     bool converged = false;
     for (; res.iterations < options.max_iterations && e.overlap > 6;) {
@@ -536,9 +539,6 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
         break;
       }
       bool stepped = false;
-      // The step's largest motion of a line point: its translation plus its rotation at the map's
-      // half diagonal.
-      const auto motion = [&](const PoseVector& d) { return d.tail<3>().norm() + d.head<3>().norm() * half_diagonal; };
       double rejected = std::numeric_limits<double>::infinity();  // the motion of the last step refused
       for (int tries = 0; tries < 12 && !stepped; ++tries) {
         PoseVector delta;
@@ -577,6 +577,42 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
       if (!stepped || converged) {
         converged = true;
         break;
+      }
+    }
+    if (weighted && level + 1 == strides.size() && options.polish_iterations > 0 && e.overlap > 6) {
+      // The root of the estimating equation Σ g·r = 0 that the covariance describes, not the local
+      // minimum of the cost LM stopped in: image 2's counts make the cost a staircase with a
+      // minimum every few millimetres, so LM stops wherever it first meets one, and where that is
+      // depends on where it started (docs/matching.md, "Calibration"). Gauss–Newton steps taken
+      // whatever the cost says, kept only if they contract (each shorter than the one before).
+      const PoseVector before = res.nu;
+      const IconicError e_before = e;
+      const int iterations_before = res.iterations;
+      const std::size_t recorded = res.rms_m.size();
+      LineSamples lines_before = lines;
+      double last = std::numeric_limits<double>::infinity();
+      bool contracting = true;
+      for (int it = 0; it < options.polish_iterations && contracting; ++it) {
+        const PoseVector delta = e.JtJ.ldlt().solve(-0.5 * e.gradient);
+        const double moved = motion(delta);
+        if (!(moved < last)) {
+          contracting = false;
+          break;
+        }
+        LineSamples trial_lines = sample(res.nu + delta);
+        const IconicError t = sumLines(trial_lines, c);
+        if (t.overlap <= 6) {
+          contracting = false;
+          break;
+        }
+        ++res.iterations;
+        res.nu += delta, e = t, lines = std::move(trial_lines), last = moved;
+        record(res, e);
+        if (moved < options.min_step_m) break;
+      }
+      if (!contracting) {
+        res.nu = before, e = e_before, lines = std::move(lines_before), res.iterations = iterations_before;
+        res.rms_m.resize(recorded), res.E_m2.resize(recorded), res.lines.resize(recorded);
       }
     }
     res.converged = converged;
@@ -674,7 +710,7 @@ Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2
   const MapGrid& grid = map1.grid();
   const LineModel model(nu, true);
   std::vector<std::vector<LineShare>> rows(grid.rows);
-  std::vector<Matrix6d> H_rows(grid.rows, Matrix6d::Zero());
+  std::vector<Matrix6d> A_rows(grid.rows, Matrix6d::Zero());
   tbb::parallel_for(tbb::blocked_range<int>(0, grid.rows), [&](const tbb::blocked_range<int>& range) {
     for (int r = range.begin(); r != range.end(); ++r)
       for (int col = 0; col < grid.cols; ++col) {
@@ -695,7 +731,11 @@ Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2
           const LocusHit h1 = map1_source->intersect(l.base, model.v);
           if (h1.state == CellState::Known) share.pixels1 = pixelShare(map1_source->image(), h1.phi, h1.theta);
         }
-        H_rows[r] += w * J * J.transpose() / (l.sigma * l.sigma);
+        // How r moves with ν where the line actually meets image 2: its own bilinear patch's normal
+        // (the counts' staircase, the noise), not map 1's smooth one that g takes.
+        PoseVector J2;
+        if (!model.jacobian(image2, nullptr, long(r) * grid.cols + col, l, J2)) J2 = J;
+        A_rows[r] += share.g * J2.transpose();
         rows[r].push_back(share);
       }
   });
@@ -705,9 +745,9 @@ Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2
   const RangeImage& im1 = map1_source ? map1_source->image() : im2;
   std::vector<PoseVector> G1(std::size_t(im1.rows()) * im1.cols(), PoseVector::Zero()),
       G2(std::size_t(im2.rows()) * im2.cols(), PoseVector::Zero());
-  Matrix6d H = Matrix6d::Zero();
+  Matrix6d A = Matrix6d::Zero();
   for (int r = 0; r < grid.rows; ++r) {  // in row order: deterministic sums
-    H += H_rows[r];
+    A += A_rows[r];
     for (const LineShare& l : rows[r])
       for (int k = 0; k < 4; ++k) {
         G1[std::size_t(l.pixels1.index[k])] += l.sigma1 * l.pixels1.weight[k] * l.g;
@@ -717,8 +757,9 @@ Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2
   Matrix6d S = Matrix6d::Zero();
   for (const PoseVector& g : G1) S += g * g.transpose();
   for (const PoseVector& g : G2) S += g * g.transpose();
-  const Matrix6d Hinv = H.ldlt().solve(Matrix6d::Identity());
-  return Hinv * S * Hinv;
+  const Matrix6d Ainv = A.partialPivLu().solve(Matrix6d::Identity());
+  const Matrix6d P = Ainv * S * Ainv.transpose();
+  return 0.5 * (P + P.transpose());
 }
 
 }  // namespace

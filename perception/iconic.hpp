@@ -80,6 +80,11 @@ struct IconicOptions {
   // that the covariance counts the pixels of image 1 that map 1's lines share. Null: map 1's lines
   // are taken to share pixels as their crossings with image 2 do (docs/matching.md).
   const LocusMapper* map1_source = nullptr;
+  // Weighted LM: after LM stops, up to this many Gauss–Newton steps taken whatever the cost says,
+  // kept only while each is shorter than the one before: the root of Σ g·r = 0 that the covariance
+  // describes, not the local minimum of the counts' staircase LM stopped in (docs/matching.md,
+  // "Calibration"). 0: off.
+  int polish_iterations = 2;
   // The paper's descent as printed (iconicPaperDescent): its gain k = paper_gain/λ_max(JᵀJ at ν0),
   // fixed for the run, and its own iteration cap (a fixed-gain descent needs far more iterations
   // than the methods above).
@@ -104,8 +109,9 @@ struct IconicResult {
   std::vector<double> E_m2;            // and eq. 6's E there, Σ r² over the lines of the overlap
   std::vector<long> lines;             // and that overlap
   long overlap = 0;
-  // Descent and LM: σ²·(JᵀJ)⁻¹ at the estimate, σ² = E/(N − 6). Weighted: (JᵀWJ)⁻¹ corrected for
-  // the pixels that neighbouring lines share (weightedCovariance); no σ² from the residuals.
+  // Descent and LM: σ²·(JᵀJ)⁻¹ at the estimate, σ² = E/(N − 6). Weighted: the sandwich of
+  // weightedCovariance (the pixels that neighbouring lines share, image 2's own slopes); no σ²
+  // from the residuals.
   Matrix6d covariance = Matrix6d::Zero();
   bool converged = false;
   // Whether the surface leaves some motion unconstrained (degeneracy()), and which: the
@@ -203,17 +209,21 @@ IconicResult iconicLevenbergMarquardt(const ElevationMap& map1, const LocusMappe
 
 // Levenberg–Marquardt on the residuals weighted by 1/(σ₁² + σ₂²) (iconicError's `weighted`; the
 // paper's future work), with the same levels, steps and stopping rules, the Cauchy loss in units of
-// the normalized residual r/σ (its scale from 2·RMS(r/σ) down to robust_sigmas), and the
-// covariance of weightedCovariance.
+// the normalized residual r/σ (its scale from 2·RMS(r/σ) down to robust_sigmas), then up to
+// options.polish_iterations Gauss–Newton steps (IconicOptions), and the covariance of
+// weightedCovariance.
 IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu0,
                             const IconicOptions& options = {});
 
 // The covariance of the weighted estimate at ν (Cauchy scale c in units of σ, map 1's normals in
-// the Jacobian), H⁻¹·S·H⁻¹ with H = JᵀWJ: a crossing of a line with an image is interpolated from
-// the four pixels around it, so two lines whose crossings share pixels err together; S sums, per
-// pixel of each image, the weighted Jacobians of the lines that read it, each line's σ spread over
-// its pixels as its bilinear weights spread it (docs/matching.md, "Calibration"). With no pixel
-// shared S = H and the covariance is H⁻¹. map1_source as in IconicOptions (may be null).
+// the Jacobian), the sandwich A⁻¹·S·A⁻ᵀ of the estimating equation Σ g·r = 0, g = w·J/σ²: a
+// crossing of a line with an image is interpolated from the four pixels around it, so two lines
+// whose crossings share pixels err together; S sums, per pixel of each image, the weighted
+// Jacobians of the lines that read it, each line's σ spread over its pixels as its bilinear
+// weights spread it. A = Σ g·J₂ᵀ, J₂ the line's Jacobian through image 2's own bilinear patch at
+// the crossing (how r actually moves: the counts' staircase and the noise), not map 1's smoothed
+// normal that g takes (docs/matching.md, "Calibration"). With no pixel shared and J₂ = J,
+// S = A = H = JᵀWJ and the covariance is H⁻¹. map1_source as in IconicOptions (may be null).
 Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
                             const std::vector<Eigen::Vector3d>& reference_normals,
                             const LocusMapper* map1_source);

@@ -629,7 +629,9 @@ perception::ScanToMapConfig MapSpec::scanToMapConfig() const {
 perception::LocusConfig locusConfig(const Scenario& sc) { return sc.map->scanToMapConfig().locus; }
 
 bool covarianceCalibrated(MatchMethod m, const perception::SensorModel& sensor) {
-  return (m == MatchMethod::IconicWeighted || m == MatchMethod::FeaturesIconicWeighted) && sensor.quantization_m == 0;
+  // Measured with the ERIM's mixed pixels, its counts and without them (0 ≤ q ≤ 7.62 cm).
+  return (m == MatchMethod::IconicWeighted || m == MatchMethod::FeaturesIconicWeighted) && sensor.mixed_pixels &&
+         sensor.quantization_m <= perception::SensorModel{}.quantization_m;
 }
 
 perception::RegistrationConfig registrationConfig(const Scenario& sc) {

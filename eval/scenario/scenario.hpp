@@ -79,9 +79,9 @@ const std::vector<MatchMethod>& matchMethods();
 std::optional<MatchMethod> matchMethodFromName(std::string_view name);
 // Whether the method's covariance is calibrated (its mean NEES within [4.5, 7.5] across three
 // terrain kinds, tests/integration/test_matching_calibration.cpp; docs/matching.md,
-// "Calibration"): iconic_weighted's, and only with a sensor that does not quantise its ranges (the
-// ERIM's 7.6 cm counts make errors that neighbouring returns share, and its covariance
-// overconfident: mean NEES 9.5). The merge propagates only calibrated covariances.
+// "Calibration"): iconic_weighted's (and features+iconic_weighted's), with the sensors it was
+// measured with: the ERIM's mixed pixels on and its counts at most the ERIM's 7.62 cm (0 included).
+// The merge propagates only calibrated covariances.
 bool covarianceCalibrated(MatchMethod m, const perception::SensorModel& sensor);
 
 struct MatchingSpec {
