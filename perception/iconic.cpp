@@ -532,6 +532,7 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
     const auto motion = [&](const PoseVector& d) { return d.tail<3>().norm() + d.head<3>().norm() * half_diagonal; };
     double lambda = 1e-3;
     bool converged = false;
+    const bool polish = weighted && level + 1 == strides.size() && options.polish_iterations > 0;
     for (; res.iterations < options.max_iterations && e.overlap > 6;) {
       ++res.iterations;
       if (rms(e) < options.floor_m) {
@@ -572,6 +573,10 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
         } else {
           rejected = motion(delta);
           lambda *= 10;
+          // At the narrowest loss on the last level, a step the cost refuses hands over to the
+          // polish below: the cost's staircase, not the estimate, refused it, and the retries LM
+          // would spend shortening it are what the polish's steps cost instead.
+          if (polish && c == c_noise) break;
         }
       }
       if (!stepped || converged) {
@@ -579,7 +584,7 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
         break;
       }
     }
-    if (weighted && level + 1 == strides.size() && options.polish_iterations > 0 && e.overlap > 6) {
+    if (polish && e.overlap > 6) {
       // The root of the estimating equation Σ g·r = 0 that the covariance describes, not the local
       // minimum of the cost LM stopped in: image 2's counts make the cost a staircase with a
       // minimum every few millimetres, so LM stops wherever it first meets one, and where that is

@@ -80,10 +80,11 @@ struct IconicOptions {
   // that the covariance counts the pixels of image 1 that map 1's lines share. Null: map 1's lines
   // are taken to share pixels as their crossings with image 2 do (docs/matching.md).
   const LocusMapper* map1_source = nullptr;
-  // Weighted LM: after LM stops, up to this many Gauss–Newton steps taken whatever the cost says,
-  // kept only while each is shorter than the one before: the root of Σ g·r = 0 that the covariance
+  // Weighted LM: after LM stops (at the narrowest loss of the last level, the first step the cost
+  // refuses ends it), up to this many Gauss–Newton steps taken whatever the cost says, kept only
+  // while each is shorter than the one before: the root of Σ g·r = 0 that the covariance
   // describes, not the local minimum of the counts' staircase LM stopped in (docs/matching.md,
-  // "Calibration"). 0: off.
+  // "Calibration"). 0: off (LM's own stopping rules).
   int polish_iterations = 2;
   // The paper's descent as printed (iconicPaperDescent): its gain k = paper_gain/λ_max(JᵀJ at ν0),
   // fixed for the run, and its own iteration cap (a fixed-gain descent needs far more iterations
