@@ -177,6 +177,7 @@ NeesAcross neesAcrossTerrains(bool quantise) {
   double all = 0, all_naive = 0;
   for (const char* kind : {"mars", "fractal", "dem"}) {
     double sum = 0, sum_naive = 0, worst = 0;
+    PoseVector per_parameter = PoseVector::Zero();  // Σ e_j²/P_jj: 1 a trial each if P is right
     int n = 0;
     for (int seed = 1; seed <= 20; ++seed) {
       eval::Scenario sc = eval::loadScenario(dir / (std::string("acceptance_") + kind + ".yaml"));
@@ -200,12 +201,16 @@ NeesAcross neesAcrossTerrains(bool quantise) {
         if (poseError(poseFromVector(t.truth), poseFromVector(res.nu)).translation_m > 0.05) continue;  // lost
         const double v = t.nees;
         sum += v, sum_naive += t.naive;
+        per_parameter += t.e.cwiseProduct(t.e).cwiseQuotient(res.covariance.diagonal());
         worst = std::max(worst, v);
         ++n;
       }
     }
-    std::printf("%s (quantisation %s): mean NEES %.2f over %d trials (naive %.1f), largest %.1f\n", kind,
-                quantise ? "on" : "off", sum / n, n, sum_naive / n, worst);
+    per_parameter /= n;
+    std::printf("%s (quantisation %s): mean NEES %.2f over %d trials (naive %.1f), largest %.1f; per parameter "
+                "e^2/P (rx ry rz tx ty tz) %.2f %.2f %.2f %.2f %.2f %.2f\n", kind, quantise ? "on" : "off", sum / n, n,
+                sum_naive / n, worst, per_parameter(0), per_parameter(1), per_parameter(2), per_parameter(3),
+                per_parameter(4), per_parameter(5));
     EXPECT_GE(n, 95) << kind;
     out.per_kind.push_back(sum / n);
     all += sum, all_naive += sum_naive, out.n += n;
