@@ -589,7 +589,8 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
       // minimum of the cost LM stopped in: image 2's counts make the cost a staircase with a
       // minimum every few millimetres, so LM stops wherever it first meets one, and where that is
       // depends on where it started (docs/matching.md, "Calibration"). Gauss–Newton steps taken
-      // whatever the cost says, kept only if they contract (each shorter than the one before).
+      // whatever the cost says, kept only if they contract (each shorter than the one before) and
+      // the first is inside the estimate's own 99.9 % region (IconicOptions).
       const PoseVector before = res.nu;
       const IconicError e_before = e;
       const int iterations_before = res.iterations;
@@ -600,7 +601,7 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
       for (int it = 0; it < options.polish_iterations && contracting; ++it) {
         const PoseVector delta = e.JtJ.ldlt().solve(-0.5 * e.gradient);
         const double moved = motion(delta);
-        if (!(moved < last)) {
+        if (!(moved < last) || (it == 0 && !(delta.dot(e.JtJ * delta) <= options.polish_max_mahalanobis2))) {
           contracting = false;
           break;
         }

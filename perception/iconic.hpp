@@ -86,6 +86,10 @@ struct IconicOptions {
   // describes, not the local minimum of the counts' staircase LM stopped in (docs/matching.md,
   // "Calibration"). 0: off (LM's own stopping rules).
   int polish_iterations = 2;
+  // The polish's first step is taken only if it lies inside the estimate's own 99.9 % region,
+  // δᵀ·JᵀWJ·δ ≤ χ²₆'s 99.9 % point (JᵀWJ of r/σ, so in χ² units): a longer one says LM did not end
+  // near the root (a stall, a nearly free direction), and LM's estimate is kept.
+  double polish_max_mahalanobis2 = 22.458;
   // The paper's descent as printed (iconicPaperDescent): its gain k = paper_gain/λ_max(JᵀJ at ν0),
   // fixed for the run, and its own iteration cap (a fixed-gain descent needs far more iterations
   // than the methods above).
