@@ -591,33 +591,32 @@ IconicResult levenbergMarquardt(const ElevationMap& map1, const LocusMapper& ima
       // depends on where it started (docs/matching.md, "Calibration"). Gauss–Newton steps taken
       // whatever the cost says, kept only if they contract (each shorter than the one before) and
       // the first is inside the estimate's own 99.9 % region (IconicOptions).
+      // (`lines` is not read after the last level: the polish samples its own.)
       const PoseVector before = res.nu;
       const IconicError e_before = e;
       const int iterations_before = res.iterations;
       const std::size_t recorded = res.rms_m.size();
-      LineSamples lines_before = lines;
       double last = std::numeric_limits<double>::infinity();
-      bool contracting = true;
-      for (int it = 0; it < options.polish_iterations && contracting; ++it) {
+      bool revert = false;
+      for (int it = 0; it < options.polish_iterations; ++it) {
         const PoseVector delta = e.JtJ.ldlt().solve(-0.5 * e.gradient);
         const double moved = motion(delta);
         if (!(moved < last) || (it == 0 && !(delta.dot(e.JtJ * delta) <= options.polish_max_mahalanobis2))) {
-          contracting = false;
+          revert = true;
           break;
         }
-        LineSamples trial_lines = sample(res.nu + delta);
-        const IconicError t = sumLines(trial_lines, c);
+        const IconicError t = sumLines(sample(res.nu + delta), c);
         if (t.overlap <= 6) {
-          contracting = false;
+          revert = true;
           break;
         }
         ++res.iterations;
-        res.nu += delta, e = t, lines = std::move(trial_lines), last = moved;
+        res.nu += delta, e = t, last = moved;
         record(res, e);
         if (moved < options.min_step_m) break;
       }
-      if (!contracting) {
-        res.nu = before, e = e_before, lines = std::move(lines_before), res.iterations = iterations_before;
+      if (revert) {
+        res.nu = before, e = e_before, res.iterations = iterations_before;
         res.rms_m.resize(recorded), res.E_m2.resize(recorded), res.lines.resize(recorded);
       }
     }
