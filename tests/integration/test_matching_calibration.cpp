@@ -178,6 +178,9 @@ TEST(MatchingCalibration, WeightedCovarianceMatchesTheErrors) {
 // DEM with rocks), 20 terrains each (seeds 1–20), 5 noise draws on each, each from a believed pose
 // drawn from the odometry prior (matching.draw_initial_error); registrations that lose the pair
 // (beyond 5 cm) are not the covariance's to explain and are counted out. Also the naive (JᵀWJ)⁻¹'s.
+// The DEM kind's 20 terrains are one window of the sample DTM under 20 rock layouts (the seed
+// changes the rocks, not the window): 20 windows of it give a worse DEM with the ERIM's counts
+// (docs/matching.md, "Calibration", the DEM's windows).
 struct NeesAcross {
   double mean = 0, naive = 0;
   double restart = 0, restart_unpolished = 0;  // WeightedTrial's, their means (when asked)
