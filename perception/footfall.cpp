@@ -57,7 +57,7 @@ Disk makeDisk(double cell, double diameter) {
 // What one candidate's evaluation produces (only the requested parts are filled).
 struct Wanted {
   bool max_min = false, planar = false, support = false, free_volume = false, equilibrium = false,
-       uncertain = false;
+       uncertain = false, soil = false;
   bool paper() const { return max_min || planar || support || free_volume || equilibrium; }
 };
 
@@ -168,7 +168,7 @@ Moments moments(const Disk& disk, const double* h, double ref, const double* top
 }
 
 struct Outputs {
-  std::array<Raster<float>*, 6> score{};  // by method index; null: not wanted
+  std::array<Raster<float>*, kAllFootfallMethods.size()> score{};  // by method index; null: not wanted
   Raster<float>* tilt = nullptr;
 };
 
@@ -191,6 +191,12 @@ void validate(const FootfallConfig& cfg, const MapGrid& grid) {
     fail("max_unknown_fraction = " + str(cfg.max_unknown_fraction) + " must be in [0, 1)");
   if (!(cfg.sigma_k >= 0) || !std::isfinite(cfg.sigma_k))
     fail("sigma_k = " + str(cfg.sigma_k) + " must be ≥ 0 and finite");
+  if (!(cfg.sinkage_m >= 0) || !std::isfinite(cfg.sinkage_m))
+    fail("sinkage_m = " + str(cfg.sinkage_m) + " must be ≥ 0 and finite");
+  if (!(cfg.rigid_height_m >= 0) || !std::isfinite(cfg.rigid_height_m))
+    fail("rigid_height_m = " + str(cfg.rigid_height_m) + " must be ≥ 0 and finite");
+  if (!(cfg.rigid_width_m > 0) || !std::isfinite(cfg.rigid_width_m))
+    fail("rigid_width_m = " + str(cfg.rigid_width_m) + " must be positive and finite");
   if (!(grid.cell > 0) || grid.rows <= 0 || grid.cols <= 0) fail("the map's grid is empty");
 }
 
@@ -209,6 +215,53 @@ void validateLayers(const ElevationLayers& m) {
   check("state", m.state.rows(), m.state.cols());
 }
 
+// EquilibriumSoil's rigid cells in rows [r0, r1) × cols [c0, c1) (clipped to the map), as a
+// map-sized mask: Known cells standing more than `height` above the grey opening of the Known
+// heights by `element` (the largest, over every placement of the element that holds the cell, of
+// the smallest Known height it covers). The opening is what is left of the surface when every feature narrower
+// than the element is taken off: the ground without its rocks. Exact (min and max only), so
+// the same on any thread count.
+std::vector<std::uint8_t> rigidCells(const ElevationLayers& map, int r0, int r1, int c0, int c1, const Disk& element,
+                                     double height) {
+  const MapGrid& g = map.grid;
+  const int k = element.reach;
+  const auto known = [&](int r, int c) {
+    return map.state(r, c) == std::uint8_t(CellState::Known) && std::isfinite(map.elevation(r, c));
+  };
+  // The erosion (min over the element's Known cells) at every placement within `k` of the window,
+  // also those centred off the map or on unknown cells: a placement need only hold a Known cell.
+  // Clipped to the map instead, the opening of a plane would fall below it near the map's edge
+  // (the placements that reach past a cell towards the rising side would be missing).
+  const int er0 = r0 - k, er1 = r1 + k, ec0 = c0 - k, ec1 = c1 + k;
+  const int ew = ec1 - ec0;
+  std::vector<float> eroded(std::size_t(std::max(er1 - er0, 0)) * std::size_t(std::max(ew, 0)), HUGE_VALF);
+  for (int r = er0; r < er1; ++r)
+    for (int c = ec0; c < ec1; ++c) {
+      float lo = HUGE_VALF;
+      for (int i = 0; i < element.size(); ++i) {
+        const int rr = r + element.drow[i], cc = c + element.dcol[i];
+        if (rr < 0 || rr >= g.rows || cc < 0 || cc >= g.cols || !known(rr, cc)) continue;
+        lo = std::min(lo, map.elevation(rr, cc));
+      }
+      eroded[std::size_t(r - er0) * ew + std::size_t(c - ec0)] = lo;
+    }
+  // The dilation of that (max over the element) at the window's Known cells.
+  std::vector<std::uint8_t> mask(std::size_t(g.rows) * g.cols, 0);
+  for (int r = std::max(r0, 0); r < std::min(r1, g.rows); ++r)
+    for (int c = std::max(c0, 0); c < std::min(c1, g.cols); ++c) {
+      if (!known(r, c)) continue;
+      float ground = -HUGE_VALF;
+      for (int i = 0; i < element.size(); ++i) {
+        const int rr = r + element.drow[i], cc = c + element.dcol[i];
+        if (rr < er0 || rr >= er1 || cc < ec0 || cc >= ec1) continue;
+        const float e = eroded[std::size_t(rr - er0) * ew + std::size_t(cc - ec0)];
+        if (e != HUGE_VALF) ground = std::max(ground, e);
+      }
+      mask[std::size_t(r) * g.cols + c] = double(map.elevation(r, c)) - double(ground) > height;
+    }
+  return mask;
+}
+
 }  // namespace
 
 std::string_view footfallMethodName(FootfallMethod m) {
@@ -219,16 +272,17 @@ std::string_view footfallMethodName(FootfallMethod m) {
     case FootfallMethod::FreeVolume: return "free_volume";
     case FootfallMethod::Equilibrium: return "equilibrium";
     case FootfallMethod::EquilibriumUncertain: return "equilibrium_uncertain";
+    case FootfallMethod::EquilibriumSoil: return "equilibrium_soil";
   }
   return "?";
 }
 
 FootfallMethod footfallMethodFromName(std::string_view name) {
-  for (FootfallMethod m : kFootfallMethods)
+  for (FootfallMethod m : kAllFootfallMethods)
     if (footfallMethodName(m) == name) return m;
   throw std::invalid_argument("unknown footfall method '" + std::string(name) +
                               "' (max_min, planar_fit, support_area, free_volume, equilibrium, "
-                              "equilibrium_uncertain)");
+                              "equilibrium_uncertain, equilibrium_soil)");
 }
 
 CellRegion regionOfBox(const MapGrid& grid, double x0, double x1, double y0, double y1) {
@@ -306,6 +360,7 @@ std::vector<FootfallScores> evaluateFootfalls(const ElevationLayers& map, const 
       case FootfallMethod::FreeVolume: want.free_volume = true; break;
       case FootfallMethod::Equilibrium: want.equilibrium = true; break;
       case FootfallMethod::EquilibriumUncertain: want.uncertain = true; break;
+      case FootfallMethod::EquilibriumSoil: want.soil = true; break;
     }
   }
 
@@ -324,6 +379,15 @@ std::vector<FootfallScores> evaluateFootfalls(const ElevationLayers& map, const 
   const auto& S = map.sigma;
   const auto& C = map.ceiling;
   const auto& ST = map.state;
+
+  // EquilibriumSoil (docs/footfall.md, "Soil"): the cells under the foot and around its rim
+  // (centres within one cell beyond it: a rock sampled there may reach under the rim, and carries
+  // the foot once the soil around it yields), and which of them are rigid.
+  const Disk overlap = makeDisk(grid.cell, cfg.foot_diameter_m + 2 * grid.cell);
+  std::vector<std::uint8_t> rigid;
+  if (want.soil && cr0 < cr1 && cc0 < cc1)
+    rigid = rigidCells(map, cr0 - overlap.reach, cr1 + overlap.reach, cc0 - overlap.reach, cc1 + overlap.reach,
+                       makeDisk(cell, cfg.rigid_width_m), cfg.rigid_height_m);
 
   auto evaluateRows = [&](const tbb::blocked_range<int>& rows) {
     Scratch w;
@@ -374,6 +438,37 @@ std::vector<FootfallScores> evaluateFootfalls(const ElevationLayers& map, const 
               const double E = cell3 * std::hypot(sxz, syz);
               (*dst.score[4])(r, c) = float(V + cfg.moment_weight * E / radius);
             }
+          }
+        }
+        // --- EquilibriumSoil: equilibrium on the surface the soil leaves, over the cells under the
+        // foot and around its rim: every cell sunk by the sinkage but the rigid ones. A disk with
+        // an unknown cell there is no candidate (a rock the map has not seen may stand under the
+        // rim); cells beyond the map's edge are left out.
+        if (want.soil) {
+          bool ok = true;
+          for (int i = 0; i < overlap.size() && ok; ++i) {
+            const int rr = r + overlap.drow[i], cc = c + overlap.dcol[i];
+            if (rr < 0 || rr >= grid.rows || cc < 0 || cc >= grid.cols) continue;
+            ok = ST(rr, cc) == std::uint8_t(CellState::Known) && std::isfinite(Z(rr, cc));
+          }
+          if (ok) {
+            // Heights relative to the centre's; sums in the overlap's fixed order.
+            const double ref = Z(r, c);
+            double top = -HUGE_VAL, sum = 0, sx = 0, sy = 0, sxz = 0, syz = 0;
+            int count = 0;
+            for (int i = 0; i < overlap.size(); ++i) {
+              const int rr = r + overlap.drow[i], cc = c + overlap.dcol[i];
+              if (rr < 0 || rr >= grid.rows || cc < 0 || cc >= grid.cols) continue;
+              const double zy = double(Z(rr, cc)) - ref - (rigid[std::size_t(rr) * grid.cols + cc] ? 0.0 : cfg.sinkage_m);
+              top = std::max(top, zy);
+              sum += zy, sx += overlap.x[i], sy += overlap.y[i], sxz += overlap.x[i] * zy, syz += overlap.y[i] * zy;
+              ++count;
+            }
+            // V = cell²·Σ(top − z_i); m = cell³·Σ(x_i, y_i)(top − z_i), Σx_i not 0 where cells
+            // beyond the map's edge were left out.
+            const double V = cell2 * (count * top - sum);
+            const double E = cell3 * std::hypot(top * sx - sxz, top * sy - syz);
+            (*dst.score[6])(r, c) = float(V + cfg.moment_weight * E / radius);
           }
         }
         // --- EquilibriumUncertain: pessimistic bounds from σ_z and shadow ceilings. ---

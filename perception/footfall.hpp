@@ -25,12 +25,22 @@ enum class FootfallMethod {
   FreeVolume,            // V = cell²·(N·z_max − Σz_i) [m³]
   Equilibrium,           // V + moment_weight·E/(foot_diameter/2) [m³], E = √(m_x² + m_y²) [m⁴]
   EquilibriumUncertain,  // Equilibrium on pessimistic surfaces from σ_z and shadow ceilings
+  EquilibriumSoil,       // Equilibrium on the surface after the soil yields (the ground lowered by
+                         // sinkage_m, cells standing above it, rocks, not), over the cells within
+                         // one cell of the foot's rim [m³]
 };
+// The methods a scenario runs unless it lists its own: §5's five and the uncertainty-aware one.
 inline constexpr std::array<FootfallMethod, 6> kFootfallMethods = {
     FootfallMethod::MaxMin,     FootfallMethod::PlanarFit,   FootfallMethod::SupportArea,
     FootfallMethod::FreeVolume, FootfallMethod::Equilibrium, FootfallMethod::EquilibriumUncertain};
+// Every method, the soil-aware one too.
+inline constexpr std::array<FootfallMethod, 7> kAllFootfallMethods = {
+    FootfallMethod::MaxMin,      FootfallMethod::PlanarFit,          FootfallMethod::SupportArea,
+    FootfallMethod::FreeVolume,  FootfallMethod::Equilibrium,        FootfallMethod::EquilibriumUncertain,
+    FootfallMethod::EquilibriumSoil};
 
-// "max_min", "planar_fit", "support_area", "free_volume", "equilibrium", "equilibrium_uncertain".
+// "max_min", "planar_fit", "support_area", "free_volume", "equilibrium", "equilibrium_uncertain",
+// "equilibrium_soil".
 std::string_view footfallMethodName(FootfallMethod m);
 // The method of that name; throws std::invalid_argument naming it if there is none.
 FootfallMethod footfallMethodFromName(std::string_view name);
@@ -57,6 +67,14 @@ struct FootfallConfig {
   double max_unknown_fraction = 0.0;
   // EquilibriumUncertain: the surfaces z ± k·σ_z; k = 2 is a one-sided 97.7 % bound per cell.
   double sigma_k = 2.0;
+  // EquilibriumSoil (docs/footfall.md, "Soil"): how far the ground sinks under the foot's load
+  // (Bekker's law for the soil and the load; 0 on rigid ground).
+  double sinkage_m = 0.0;
+  // EquilibriumSoil: a cell is rigid (a rock: it does not sink) where it stands more than
+  // rigid_height_m above the ground, the map's grey opening by a disk rigid_width_m across (what
+  // is left when everything narrower than that is taken off).
+  double rigid_height_m = 0.03;
+  double rigid_width_m = 0.6;
 };
 
 // Candidate centres: a rectangle of cells of the map grid (row-major: row 0 is the largest y).

@@ -26,6 +26,7 @@
 #include "perception/sensor_geometry.hpp"
 #include "python/bindings.hpp"
 #include "sim/erim_scanner.hpp"
+#include "sim/leg.hpp"
 
 namespace ambler::python {
 
@@ -220,6 +221,9 @@ Foot footOf(const std::optional<std::vector<double>>& region, const std::optiona
     for (const std::string& name : *methods) f.spec.methods.push_back(perception::footfallMethodFromName(name));
   }
   f.config.foot_diameter_m = f.spec.foot_diameter_m;
+  // equilibrium_soil's sinkage as the footfall stage sets it: the leg's soil and load.
+  if (section && scenario->scenario.leg && scenario->scenario.leg->soil == eval::Soil::Sand)
+    f.config.sinkage_m = sim::bekkerSinkage(scenario->scenario.leg->load_n, eval::legConfig(scenario->scenario));
   for (const auto& [key, value] : keywords) {
     const std::string k = py::cast<std::string>(key);
     double* target = k == "foot_diameter_m"            ? &f.config.foot_diameter_m
@@ -228,10 +232,14 @@ Foot footOf(const std::optional<std::vector<double>>& region, const std::optiona
                      : k == "moment_weight"            ? &f.config.moment_weight
                      : k == "max_unknown_fraction"     ? &f.config.max_unknown_fraction
                      : k == "sigma_k"                  ? &f.config.sigma_k
+                     : k == "sinkage_m"                ? &f.config.sinkage_m
+                     : k == "rigid_height_m"           ? &f.config.rigid_height_m
+                     : k == "rigid_width_m"            ? &f.config.rigid_width_m
                                                        : nullptr;
     if (!target)
       throw py::value_error("evaluate_footfalls: unknown keyword '" + k + "' (foot_diameter_m, min_support_fraction, "
-                            "max_normal_deviation_deg, moment_weight, max_unknown_fraction, sigma_k)");
+                            "max_normal_deviation_deg, moment_weight, max_unknown_fraction, sigma_k, sinkage_m, "
+                            "rigid_height_m, rigid_width_m)");
     if (!py::isinstance<py::float_>(value) && !py::isinstance<py::int_>(value))
       throw py::value_error("evaluate_footfalls: " + k + ": expected a number");
     *target = py::cast<double>(value);
@@ -318,7 +326,8 @@ void bindFootfall(py::module_& m) {
       py::arg("methods") = py::none(), py::arg("scenario") = py::none(),
       "Every candidate foot centre of region R = (x0, x1, y0, y1) (the scenario's footfall.region by default) scored "
       "by each method, on the layers of a map (row 0 at y_max_m, column 0 at x_min_m); keywords foot_diameter_m, "
-      "min_support_fraction, max_normal_deviation_deg, moment_weight, max_unknown_fraction, sigma_k set the foot. "
+      "min_support_fraction, max_normal_deviation_deg, moment_weight, max_unknown_fraction, sigma_k set the foot, "
+      "sinkage_m (the scenario's sand under its leg's load by default), rigid_height_m and rigid_width_m the soil. "
       "float32 / uint8 arrays with contiguous rows are read in place, others copied.");
 }
 

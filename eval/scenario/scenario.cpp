@@ -457,7 +457,8 @@ FootfallSpec readFootfall(const Reader& reader, const YAML::Node& node, const Sc
     for (std::size_t i = 0; i < ms->size(); ++i) {
       const std::string path = "footfall.methods[" + std::to_string(i) + "]";
       const std::string_view name = reader.choice((*ms)[i], path, {"max_min", "planar_fit", "support_area", "free_volume",
-                                                                   "equilibrium", "equilibrium_uncertain"});
+                                                                   "equilibrium", "equilibrium_uncertain",
+                                                                   "equilibrium_soil"});
       ff.methods.push_back(perception::footfallMethodFromName(name));
     }
   }

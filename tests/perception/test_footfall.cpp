@@ -112,8 +112,9 @@ bool sameBits(const Raster<float>& a, const Raster<float>& b) {
 }
 
 TEST(Footfall, MethodNamesRoundTrip) {
-  for (M m : kFootfallMethods) EXPECT_EQ(footfallMethodFromName(footfallMethodName(m)), m);
+  for (M m : kAllFootfallMethods) EXPECT_EQ(footfallMethodFromName(footfallMethodName(m)), m);
   EXPECT_EQ(footfallMethodName(M::EquilibriumUncertain), "equilibrium_uncertain");
+  EXPECT_EQ(footfallMethodName(M::EquilibriumSoil), "equilibrium_soil");
   EXPECT_THROW(footfallMethodFromName("flat_enough"), std::invalid_argument);
 }
 
@@ -451,6 +452,83 @@ TEST(Footfall, EquilibriumUncertainAvoidsHighShadowsAndLargeSigmaThatFoolEquilib
   }
 }
 
+// The soil-aware equilibrium (docs/footfall.md, "Soil"), against its definition and closed forms.
+// Its disk is the cells within one cell beyond the foot's rim (diameter D + 2·cell).
+// - Rigid ground (sinkage 0): the equilibrium's V + w·E/R over that disk, from the definition
+//   (`reference` on the wider disk; R stays the foot's radius), on a rough surface.
+// - A tilted plane: its grey opening is the plane itself, so no cell is rigid, every cell sinks
+//   alike, and V and E (differences from the disk's top) are those of rigid ground.
+// - A flat plane with a box rock of height h narrower than the opening's element: the rock's cells
+//   stand h above the ground, so they are rigid and the rest sinks by s. Relative to the ground's
+//   cells every rock cell then stands h + s, not h: V = cell²·(N − n_r)·(h + s) and, since Σx = 0
+//   over the disk, E = cell³·(h + s)·|Σ_rock (x, y)|: the rigid score times (h + s)/h.
+TEST(Footfall, EquilibriumSoilIsEquilibriumOnTheSurfaceTheSoilLeaves) {
+  const double cell = 0.05;
+  FootfallConfig wide;  // the reference's disk; cells on its circle count (a centre 4 cells away)
+  wide.foot_diameter_m = FootfallConfig{}.foot_diameter_m + 2 * cell + 1e-9;
+  const double R = 0.5 * FootfallConfig{}.foot_diameter_m;
+  const int reach = int(std::floor(0.5 * wide.foot_diameter_m / cell + 1e-9));
+  const MapGrid g = MapGrid::covering(0, 2, 0, 2, cell);
+  const auto interior = [&](int r, int c) {
+    return r >= reach && c >= reach && r < g.rows - reach && c < g.cols - reach;
+  };
+  for (double sinkage : {0.0, 0.05}) {
+    for (bool tilted : {false, true}) {
+      if (sinkage > 0 && !tilted) continue;  // rough ground has cells that stand out: not a plane
+      const ElevationMap m = surfaceMap(g, [&](double x, double y) {
+        return tilted ? 0.12 * x - 0.07 * y + 0.4 : 0.1 * std::sin(7 * x) * std::cos(5 * y) + 0.03 * std::sin(31 * x + 17 * y);
+      });
+      FootfallConfig cfg;
+      cfg.sinkage_m = sinkage;
+      const auto soil = evaluateFootfalls(m, wholeMap(g), cfg, {M::EquilibriumSoil});
+      int compared = 0;
+      for (int r = 0; r < g.rows; ++r)
+        for (int c = 0; c < g.cols; ++c) {
+          if (!interior(r, c) || std::isnan(soil[0].score(r, c))) continue;
+          const Reference ref = reference(m, r, c, wide);
+          const double want = ref.V + ref.E / R;
+          ++compared;
+          // One rounding to float at the end, of sums of 37 heights of order 0.5 m.
+          ASSERT_NEAR(soil[0].score(r, c), want, 1e-6 * want + 1e-9) << r << ", " << c << " sinkage " << sinkage;
+        }
+      EXPECT_GT(compared, 1000);
+    }
+  }
+  // A flat plane with a box rock (2 × 2 cells) of height h: the score with sinkage s is the score
+  // on rigid ground times (h + s)/h wherever the disk holds some of the rock, 0 elsewhere.
+  const double h = 0.04, s = 0.05;
+  const MapGrid g2 = MapGrid::covering(0, 1.5, 0, 1.5, cell);
+  ElevationMap rock(g2);
+  for (int r = 0; r < g2.rows; ++r)
+    for (int c = 0; c < g2.cols; ++c) rock.setKnown(r, c, (r == 14 || r == 15) && (c == 14 || c == 15) ? float(h) : 0.0f, 0);
+  FootfallConfig rigid_cfg, sand_cfg;
+  sand_cfg.sinkage_m = s;
+  const auto on_rock = evaluateFootfalls(rock, wholeMap(g2), rigid_cfg, {M::EquilibriumSoil});
+  const auto on_sand = evaluateFootfalls(rock, wholeMap(g2), sand_cfg, {M::EquilibriumSoil});
+  int with_rock = 0;
+  for (int r = reach; r < g2.rows - reach; ++r)
+    for (int c = reach; c < g2.cols - reach; ++c) {
+      const double rigid = on_rock[0].score(r, c), sand = on_sand[0].score(r, c);
+      if (std::isnan(rigid)) continue;
+      if (rigid == 0) {
+        EXPECT_NEAR(sand, 0.0, 1e-12) << r << ", " << c;  // no rock in the disk: it sinks level
+        continue;
+      }
+      ++with_rock;
+      EXPECT_NEAR(sand, rigid * (h + s) / h, 1e-6 * sand) << r << ", " << c;
+    }
+  EXPECT_GT(with_rock, 20);
+  // An unknown cell just beyond the rim (4 cells from the centre: outside §5's disk, inside the
+  // ring) rejects the disk for the soil's method, not for equilibrium: a rock the map has not seen
+  // may stand there.
+  ElevationMap holed = rock;
+  holed.setUnknown(20, 24, CellState::Unseen);
+  const auto h2 = evaluateFootfalls(holed, wholeMap(g2), sand_cfg, {M::Equilibrium, M::EquilibriumSoil});
+  EXPECT_TRUE(std::isfinite(h2[0].score(20, 20)));
+  EXPECT_TRUE(std::isnan(h2[1].score(20, 20)));
+  EXPECT_TRUE(std::isfinite(h2[1].score(20, 19)));  // 5 cells away: beyond the ring
+}
+
 // Same bits on one thread and on two: each candidate is computed alone, in a fixed order.
 TEST(Footfall, ScoresAreTheSameOnAnyNumberOfThreads) {
   const MapGrid g = MapGrid::covering(0, 3, 0, 3, 0.02);
@@ -469,9 +547,11 @@ TEST(Footfall, ScoresAreTheSameOnAnyNumberOfThreads) {
     }
   FootfallConfig cfg;
   cfg.max_unknown_fraction = 0.05;
+  cfg.sinkage_m = 0.05;
+  cfg.rigid_height_m = 0.01;  // some cells rigid, some not
   auto run = [&](int threads) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
-    return evaluateFootfalls(map, wholeMap(g), cfg);
+    return evaluateFootfalls(map, wholeMap(g), cfg, {kAllFootfallMethods.begin(), kAllFootfallMethods.end()});
   };
   const auto one = run(1), two = run(2);
   for (size_t i = 0; i < one.size(); ++i) {
@@ -510,6 +590,15 @@ TEST(Footfall, BadInputThrowsWithAClearMessage) {
   cfg = {};
   cfg.max_unknown_fraction = 1;
   expectInvalid([&] { evaluateFootfalls(map, wholeMap(g), cfg); }, "max_unknown_fraction");
+  cfg = {};
+  cfg.sinkage_m = -0.01;
+  expectInvalid([&] { evaluateFootfalls(map, wholeMap(g), cfg); }, "sinkage_m");
+  cfg = {};
+  cfg.rigid_height_m = std::numeric_limits<double>::quiet_NaN();
+  expectInvalid([&] { evaluateFootfalls(map, wholeMap(g), cfg); }, "rigid_height_m");
+  cfg = {};
+  cfg.rigid_width_m = 0;
+  expectInvalid([&] { evaluateFootfalls(map, wholeMap(g), cfg); }, "rigid_width_m");
 }
 
 // Layers held elsewhere (ElevationLayers: the Python module's numpy arrays) give the bits the same
