@@ -218,9 +218,9 @@ void validateLayers(const ElevationLayers& m) {
 // EquilibriumSoil's rigid cells in rows [r0, r1) × cols [c0, c1) (clipped to the map), as a
 // map-sized mask: Known cells standing more than `height` above the grey opening of the Known
 // heights by `element` (the largest, over every placement of the element that holds the cell, of
-// the smallest Known height it covers). The opening is what is left of the surface when every feature narrower
-// than the element is taken off: the ground without its rocks. Exact (min and max only), so
-// the same on any thread count.
+// the smallest Known height it covers). The opening is what is left of the surface when every
+// feature narrower than the element is taken off: the ground without its rocks. Exact (min and
+// max only), so the same on any thread count.
 std::vector<std::uint8_t> rigidCells(const ElevationLayers& map, int r0, int r1, int c0, int c1, const Disk& element,
                                      double height) {
   const MapGrid& g = map.grid;

@@ -209,6 +209,25 @@ def test_footfall_inputs_are_read_in_place_where_the_layout_allows(demo):
     assert np.isfinite(fs[0].score).sum() < np.isfinite(default[0].score).sum()  # fewer centres hold a 0.5 m foot
 
 
+def test_the_soils_sinkage_is_the_scenarios_leg(demo):
+    # equilibrium_soil takes its sinkage from the scenario's leg (sand, 4 kN: Bekker's law,
+    # docs/leg.md) as the footfall stage does; given as a keyword it overrides that, and 0 differs.
+    s, run, _, _, _ = demo
+    m = run.maps["composite"]
+    args = (m.elevation, m.sigma, m.state, m.cell_m, m.x_min_m, m.y_max_m)
+    n, k_c, k_phi, b = 1.1, 0.99e3, 1528.43e3, 0.15
+    bekker = (4000 / (np.pi * b * b) / (k_c / b + k_phi)) ** (1 / n)
+    assert abs(bekker - 0.0498) < 1e-4  # docs/leg.md: 4.98 cm at 4 kN
+    scen = ambler.evaluate_footfalls(*args, ceiling=m.ceiling, scenario=s, methods=["equilibrium_soil"])[0]
+    given = ambler.evaluate_footfalls(*args, ceiling=m.ceiling, scenario=s, methods=["equilibrium_soil"],
+                                      sinkage_m=bekker)[0]
+    rigid = ambler.evaluate_footfalls(*args, ceiling=m.ceiling, scenario=s, methods=["equilibrium_soil"],
+                                      sinkage_m=0.0)[0]
+    np.testing.assert_allclose(scen.score, given.score, rtol=1e-6, atol=1e-12)
+    assert np.isfinite(scen.score).sum() > 100
+    assert not np.allclose(scen.score[np.isfinite(scen.score)], rigid.score[np.isfinite(rigid.score)])
+
+
 def test_footfall_errors_are_the_projects_lines(demo):
     s, run, _, _, _ = demo
     m = run.maps["composite"]
