@@ -12,10 +12,13 @@ chosen spot (the cells within one cell beyond the rim, the method's own disk): t
 above the ground in truth (the world minus the same world without its rocks) and what the map
 showed there, its white top-hat (height above the grey opening by a 0.6 m disk, the method's rule
 for a rock: above 3 cm). A miss whose rock the map shows below 3 cm, while the truth's choice
-held, is the map's. How far any threshold on the top-hat could have helped: the share of the
-map's rock-free Known cells whose top-hat is at least the rock's, and the chance that a disk of
-the method's 37 rock-free cells holds one (1 − (1 − p)^37): a threshold low enough to call this
-rock a rock calls that share of clean disks rocky too.
+held, is the map's when no threshold on the top-hat could have told it from the map's noise: the
+share p of the map's rock-free Known cells whose top-hat is at least the rock's, and the chance
+that a disk of the method's 37 rock-free cells holds one (1 − (1 − p)^37): a threshold low
+enough to call this rock a rock calls that share of clean disks rocky too. Where that is at least
+half, the cause says the map's. Also the map's: a cell of that disk the sensor could not see (a
+range shadow in truth, World.visibility) that the map calls Known more than 2 cm off the truth,
+the shadow bridged as ground. Otherwise the method's (the map shows the rock).
 """
 import argparse
 import csv
@@ -100,9 +103,12 @@ def main():
         x, y = float(row[f"footfall.{m}.x_m"]), float(row[f"footfall.{m}.y_m"])
         r0, c0 = int((view.y_max_m - y) / cell), int((x - view.x_min_m) / cell)
         rock = truth.elevation - ground.elevation
+        hidden = world.visibility(pose) == 2
         hat = top_hat(view.elevation.astype(float), view.state == 1, cell)
         best = (0.0, math.nan)
         ring = disk_offsets(0.5 * 0.30 / cell + 1)
+        bridged = max((abs(float(view.elevation[r0 + i, c0 + j]) - float(truth.elevation[r0 + i, c0 + j]))
+                       for i, j in ring if hidden[r0 + i, c0 + j] and view.state[r0 + i, c0 + j] == 1), default=0.0)
         for i, j in ring:
             h = rock[r0 + i, c0 + j]
             if h > best[0]:
@@ -113,11 +119,16 @@ def main():
         false_disks = 1 - (1 - p) ** len(ring)
         tilt, slip = float(row[f"footfall.{m}.leg.tilt_deg"]), float(row[f"footfall.{m}.leg.slip_m"])
         if best[0] < 0.005:
-            cause = "no rock within reach (the leg)"
-        elif not (best[1] > RIGID_HEIGHT_M):
-            cause = "the map: rock below the top-hat's 3 cm" if tb else "the map, and the truth's choice also missed"
+            cause = "the leg: no rock within reach"
+        elif not tb:
+            cause = "the truth's choice missed too"
+        elif false_disks >= 0.5:
+            cause = ("the map: below the 3 cm, " if not (best[1] > RIGID_HEIGHT_M) else "the map: ") + \
+                "as high as the noise in most clean disks"
+        elif bridged > 0.02:
+            cause = f"the map: a range shadow in the disk mapped as ground, {100 * bridged:.1f} cm off"
         else:
-            cause = "a rock the map shows: the score accepted it"
+            cause = "the method: the map shows the rock"
         print(f"| {seed} | [{x0:g}, {x1:g}], [{y0:g}, {y1:g}] | {row.get('terrain.rocks.abundance_k', '')} | {row['leg.soil']} | "
               f"({x:.3f}, {y:.3f}) | {tilt:.1f}° / {1000 * slip:.1f} mm | "
               f"{float(row[f'footfall.{m}.truth_best.leg.tilt_deg']):.1f}° ({'held' if tb else 'missed'}) | "

@@ -59,6 +59,10 @@ struct LegOutcome {
   int max_pair_contacts = 0;  // most contacts seen between one foot geom and one other geom
   int max_contacts = 0, max_rows = 0;  // most contacts (d->ncon) and constraint rows (d->nefc)
   bool settled = false;
+  // Settled by the excursion rule (docs/leg.md, "A step"): at the time limit the speeds never
+  // stayed under the settle speeds for a window, but over the last window the foot moved and
+  // turned less than those speeds allow (it jitters in place).
+  bool settled_by_excursion = false;
   // Contacts were dropped: a foot-geom/terrain-geom pair hit MuJoCo's 50 (mjMAXCONPAIR) or the
   // model's contact or constraint buffer filled (heightfields much finer than 2 cm).
   bool contact_cap_reached = false;
@@ -125,6 +129,12 @@ class Leg {
   explicit Leg(std::unique_ptr<Impl> impl);
   std::unique_ptr<Impl> impl_;
 };
+
+// The excursion rule's test (docs/leg.md, "A step"): every pose of a window (sole centres and foot
+// axes, unit vectors, in order) lies within `max_move_m` of the first's sole centre and within
+// `max_turn_rad` of its axis. False for fewer than two poses or lists of different lengths.
+bool stillOverWindow(const std::vector<Eigen::Vector3d>& soles, const std::vector<Eigen::Vector3d>& axes,
+                     double max_move_m, double max_turn_rad);
 
 // The rest pose of a rigid disk lowered vertically onto a height grid, without dynamics: the
 // plane under the disk that puts its centre lowest with no terrain point above it (the disk

@@ -333,6 +333,10 @@ std::optional<LegOutcome> simulate(mjModel* m, mjData* d, const Rig& g, const Le
   const double dt = m->opt.timestep;
   double hold_until = -1;
   Eigen::Vector3d settled_at = Eigen::Vector3d::Zero();
+  // The foot's poses over the last settle window (the excursion rule at the time limit).
+  const int window_steps = std::max(1, int(std::lround(c.settle_window_s / dt)));
+  std::vector<Eigen::Vector3d> recent_soles(std::size_t(window_steps) + 1), recent_axes(recent_soles.size());
+  long pose_count = 0;
   while (d->time < c.time_limit_s + c.hold_s) {
     const double vz = d->qvel[g.vz];
     const double allowed = t_contact < 0 ? 0.0 : c.load_n * std::min(1.0, (d->time - t_contact) / c.load_ramp_s);
@@ -383,7 +387,27 @@ std::optional<LegOutcome> simulate(mjModel* m, mjData* d, const Rig& g, const Le
                       Eigen::Vector3d(vel[0], vel[1], vel[2]).norm() < c.settle_angular_speed_rad_s;
     const bool loaded = t_contact >= 0 && d->time >= t_contact + c.load_ramp_s;
     settle_since = (slow && loaded) ? (settle_since < 0 ? d->time : settle_since) : -1;
-    const bool settled = settle_since >= 0 && d->time - settle_since >= c.settle_window_s;
+    bool settled = settle_since >= 0 && d->time - settle_since >= c.settle_window_s;
+    if (loaded) {
+      const FootPose p = pose();
+      const std::size_t slot = std::size_t(pose_count++ % long(recent_soles.size()));
+      recent_soles[slot] = p.sole, recent_axes[slot] = p.axis;
+    }
+    if (!settled && loaded && d->time >= c.time_limit_s && pose_count >= long(recent_soles.size())) {
+      // The excursion rule: a foot that jitters in place (contact chatter: speeds crossing the
+      // thresholds every few milliseconds while its pose stays put) never meets the speed rule.
+      // What the speed rule guarantees is that over a window the foot moves less than v·w and
+      // turns less than ω·w; if every pose of the last window is that close to the window's
+      // first, the foot is as settled as the speed rule would have it. Only at the time limit, so
+      // a step the speed rule settles is unchanged.
+      std::vector<Eigen::Vector3d> soles, axes;  // in time order: the oldest first
+      for (std::size_t k = 0; k < recent_soles.size(); ++k) {
+        const std::size_t slot = std::size_t((pose_count + long(k)) % long(recent_soles.size()));
+        soles.push_back(recent_soles[slot]), axes.push_back(recent_axes[slot]);
+      }
+      settled = out.settled_by_excursion = stillOverWindow(soles, axes, c.settle_speed_m_s * c.settle_window_s,
+                                                             c.settle_angular_speed_rad_s * c.settle_window_s);
+    }
     if (settled || d->time >= c.time_limit_s) {
       out.settled = settled;
       measure();
@@ -527,5 +551,15 @@ bool Leg::cropped() const { return impl_->cropped; }
 int Leg::terrainGeoms() const { return impl_->kept; }
 int Leg::droppedGeoms() const { return impl_->dropped; }
 int Leg::fallbacks() const { return impl_->fallbacks; }
+
+bool stillOverWindow(const std::vector<Eigen::Vector3d>& soles, const std::vector<Eigen::Vector3d>& axes,
+                     double max_move_m, double max_turn_rad) {
+  if (soles.size() < 2 || soles.size() != axes.size()) return false;
+  for (std::size_t k = 1; k < soles.size(); ++k) {
+    const double turned = std::acos(std::clamp(axes[k].dot(axes[0]), -1.0, 1.0));
+    if (!((soles[k] - soles[0]).norm() < max_move_m) || !(turned < max_turn_rad)) return false;
+  }
+  return true;
+}
 
 }  // namespace ambler::sim

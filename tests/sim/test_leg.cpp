@@ -10,6 +10,9 @@
 
 #include "fixtures.hpp"
 #include "sim/leg.hpp"
+
+#include <Eigen/Geometry>
+#include <vector>
 #include "sim/world.hpp"
 
 namespace ambler::sim {
@@ -55,6 +58,36 @@ terrains::Terrain planeWithSlab(double hx, double hy, double hz, double cell) {
   rock.diameter_m = 2 * std::sqrt(4 * hx * hy / std::numbers::pi);
   t.rocks.push_back(rock);
   return t;
+}
+
+// The excursion rule's test (docs/leg.md, "A step"), against its definition: poses within v·w of
+// the window's first sole and ω·w of its axis are still; one pose beyond either bound is not. A
+// jitter in place (sole ±2 µm, axis ±3·10⁻⁵ rad, as seen in the sandbox) is still; a creep at
+// 3 mm/s over 50 ms (0.15 mm > 0.1 mm) and a turn at 0.03 rad/s (1.5 mrad > 1 mrad) are not.
+TEST(LegStillness, ExcursionRuleAgainstItsBounds) {
+  const double v = 2e-3, omega = 0.02, w = 0.05, dt = 1e-3;
+  const int n = int(std::lround(w / dt)) + 1;
+  const Eigen::Vector3d axis0 = Eigen::Vector3d(0.0178, -0.0086, 1).normalized();
+  const auto tilted = [&](double angle) {  // axis0 turned by `angle` about x
+    return (Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitX()) * axis0).normalized();
+  };
+  std::vector<Eigen::Vector3d> soles, axes;
+  for (int k = 0; k < n; ++k) {
+    soles.push_back(Eigen::Vector3d(-0.8257, 2.2756, -0.0166) + Eigen::Vector3d(2e-6 * std::sin(k), 0, 0));
+    axes.push_back(tilted(3e-5 * std::sin(0.7 * k)));
+  }
+  EXPECT_TRUE(ambler::sim::stillOverWindow(soles, axes, v * w, omega * w));
+  std::vector<Eigen::Vector3d> creep = soles, turn = axes;
+  for (int k = 0; k < n; ++k) creep[k].y() += 3e-3 * k * dt;
+  for (int k = 0; k < n; ++k) turn[k] = tilted(0.03 * k * dt);
+  EXPECT_FALSE(ambler::sim::stillOverWindow(creep, axes, v * w, omega * w));
+  EXPECT_FALSE(ambler::sim::stillOverWindow(soles, turn, v * w, omega * w));
+  // The bounds are strict and tested against the first pose: a sole exactly v·w away is not still.
+  std::vector<Eigen::Vector3d> edge = soles;
+  edge.back() = soles.front() + Eigen::Vector3d(0, v * w, 0);
+  EXPECT_FALSE(ambler::sim::stillOverWindow(edge, axes, v * w, omega * w));
+  EXPECT_FALSE(ambler::sim::stillOverWindow({soles[0]}, {axes[0]}, v * w, omega * w));
+  EXPECT_FALSE(ambler::sim::stillOverWindow(soles, {axes[0], axes[1]}, v * w, omega * w));
 }
 
 TEST(Leg, BekkerSinkageOfTheAmblerFoot) {

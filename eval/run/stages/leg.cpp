@@ -127,6 +127,7 @@ void run(RunState& s) {
     if (!std::isfinite(x)) {
       for (const char* key : {"tilt_deg", "sink_m", "slip_m"}) j[key] = nullptr;
       j["settled"] = false;
+      j["settled_by_excursion"] = false;
       j["predicted_tilt_deg"] = nullptr;
       return j;
     }
@@ -136,13 +137,15 @@ void run(RunState& s) {
     j["sink_m"] = o.sink_m;
     j["slip_m"] = o.slip_m;
     j["settled"] = o.settled;
+    j["settled_by_excursion"] = o.settled_by_excursion;
     j["contact_cap_reached"] = o.contact_cap_reached;
     j["predicted_tilt_deg"] = rest ? jsonNumber(rest->tilt_deg) : nlohmann::ordered_json(nullptr);
     return j;
   };
   const auto metricsOf = [](const nlohmann::ordered_json& j) {
     nlohmann::ordered_json m;
-    for (const char* key : {"tilt_deg", "sink_m", "slip_m", "settled", "predicted_tilt_deg"}) m[key] = j[key];
+    for (const char* key : {"tilt_deg", "sink_m", "slip_m", "settled", "settled_by_excursion", "predicted_tilt_deg"})
+      m[key] = j[key];
     return m;
   };
   const auto degrees = [](const nlohmann::ordered_json& v) {
