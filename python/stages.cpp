@@ -26,7 +26,6 @@
 #include "perception/sensor_geometry.hpp"
 #include "python/bindings.hpp"
 #include "sim/erim_scanner.hpp"
-#include "sim/leg.hpp"
 
 namespace ambler::python {
 
@@ -221,9 +220,7 @@ Foot footOf(const std::optional<std::vector<double>>& region, const std::optiona
     for (const std::string& name : *methods) f.spec.methods.push_back(perception::footfallMethodFromName(name));
   }
   f.config.foot_diameter_m = f.spec.foot_diameter_m;
-  // equilibrium_soil's sinkage as the footfall stage sets it: the leg's soil and load.
-  if (section && scenario->scenario.leg && scenario->scenario.leg->soil == eval::Soil::Sand)
-    f.config.sinkage_m = sim::bekkerSinkage(scenario->scenario.leg->load_n, eval::legConfig(scenario->scenario));
+  if (section) f.config.sinkage_m = eval::soilSinkage(scenario->scenario);  // as the footfall stage sets it
   for (const auto& [key, value] : keywords) {
     const std::string k = py::cast<std::string>(key);
     double* target = k == "foot_diameter_m"            ? &f.config.foot_diameter_m

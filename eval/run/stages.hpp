@@ -35,5 +35,8 @@ Stage traverse();   // the rover walks the path: each stop scanned, registered, 
 // soil, no hold after settling; and the footfall region it steps in.
 sim::LegConfig legConfig(const Scenario& sc);
 sim::LegRegion legRegion(const Scenario& sc);
+// equilibrium_soil's sinkage (perception::FootfallConfig::sinkage_m): Bekker's law for the leg
+// section's load on sand (docs/leg.md); 0 on rock or without a leg or footfall section.
+double soilSinkage(const Scenario& sc);
 
 }  // namespace ambler::eval

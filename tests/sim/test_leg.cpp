@@ -7,12 +7,12 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <vector>
+
+#include <Eigen/Geometry>
 
 #include "fixtures.hpp"
 #include "sim/leg.hpp"
-
-#include <Eigen/Geometry>
-#include <vector>
 #include "sim/world.hpp"
 
 namespace ambler::sim {

@@ -15,7 +15,6 @@
 #include "eval/scenario/io.hpp"
 #include "eval/pictures/plot.hpp"
 #include "eval/run/stages.hpp"
-#include "sim/leg.hpp"
 
 namespace ambler::eval::stages {
 
@@ -73,9 +72,7 @@ void run(RunState& s) {
   const perception::CellRegion region = spec.candidates(grid);
   perception::FootfallConfig config;
   config.foot_diameter_m = spec.foot_diameter_m;
-  // The soil-aware method's sinkage: Bekker's law for the leg's soil and load (docs/leg.md); 0 on
-  // rock or without a leg.
-  if (sc.leg && sc.leg->soil == Soil::Sand) config.sinkage_m = sim::bekkerSinkage(sc.leg->load_n, legConfig(sc));
+  config.sinkage_m = soilSinkage(sc);
   base::Stopwatch t;
   const std::vector<perception::FootfallScores> scores = perception::evaluateFootfalls(map, region, config, spec.methods);
   s.addTime("footfall", t.seconds());

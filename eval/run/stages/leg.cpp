@@ -32,6 +32,11 @@ sim::LegConfig legConfig(const Scenario& sc) {
   return config;
 }
 
+double soilSinkage(const Scenario& sc) {
+  if (!sc.footfall || !sc.leg || sc.leg->soil != Soil::Sand) return 0.0;
+  return sim::bekkerSinkage(sc.leg->load_n, legConfig(sc));
+}
+
 sim::LegRegion legRegion(const Scenario& sc) {
   const FootfallSpec& ff = *sc.footfall;
   return {ff.x_m[0], ff.x_m[1], ff.y_m[0], ff.y_m[1]};
