@@ -496,7 +496,7 @@ namespace {
 // weightedCovariance with each line's search started at its hint (one per cell of map 1).
 Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
                              const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source,
-                             std::vector<int>* hints);
+                             std::vector<int>* hints, bool influence_bread);
 
 // LM on the plain residuals (weighted = false) or on r/σ; `c_final` receives the loss's last scale.
 // hints: one per cell of map 1 (−1 at first), each line's last bracket, for the caller's last
@@ -660,7 +660,8 @@ IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2,
   res.degenerate = d.degenerate;
   res.free_directions = d.free_directions;
   if (e.overlap > 6 && !d.degenerate)
-    res.covariance = covarianceWithHints(map1, image2, res.nu, c, normals, options.map1_source, &hints);
+    res.covariance =
+        covarianceWithHints(map1, image2, res.nu, c, normals, options.map1_source, &hints, options.influence_bread);
   else res.covariance.setConstant(std::numeric_limits<double>::quiet_NaN());
   res.hints = std::move(hints);
   return res;
@@ -703,15 +704,16 @@ struct LineShare {
 }  // namespace
 
 Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
-                            const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source) {
-  return covarianceWithHints(map1, image2, nu, c, reference_normals, map1_source, nullptr);
+                            const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source,
+                            bool influence_bread) {
+  return covarianceWithHints(map1, image2, nu, c, reference_normals, map1_source, nullptr, influence_bread);
 }
 
 namespace {
 
 Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
                              const std::vector<Eigen::Vector3d>& reference_normals, const LocusMapper* map1_source,
-                             std::vector<int>* hints) {
+                             std::vector<int>* hints, bool influence_bread) {
   const MapGrid& grid = map1.grid();
   const LineModel model(nu, true);
   std::vector<std::vector<LineShare>> rows(grid.rows);
@@ -740,7 +742,11 @@ Matrix6d covarianceWithHints(const ElevationMap& map1, const LocusMapper& image2
         // (the counts' staircase, the noise), not map 1's smooth one that g takes.
         PoseVector J2;
         if (!model.jacobian(image2, nullptr, long(r) * grid.cols + col, l, J2)) J2 = J;
-        A_rows[r] += share.g * J2.transpose();
+        // influence_bread: A as the derivative of the estimating equation Σ ψ(u)·J/σ, the Cauchy
+        // influence ψ(u) = u/(1 + u²/c²) having ψ′(u) = w·(1 − u²/c²)/(1 + u²/c²), instead of the
+        // weight w that the Gauss–Newton matrix holds fixed (docs/matching.md, "Calibration").
+        const double q = influence_bread && c > 0 ? l.u * l.u / (c * c) : 0.0;
+        A_rows[r] += ((1 - q) / (1 + q)) * share.g * J2.transpose();
         rows[r].push_back(share);
       }
   });

@@ -271,6 +271,57 @@ TEST(Iconic, WeightedCovarianceOfLinesSharingNoPixelIsTheInverseInformation) {
   }
 }
 
+// The sandwich's bread is the derivative of the estimating equation Σ ψ(u)·J/σ (u = r/σ), not the
+// Gauss–Newton matrix: with the Cauchy loss ψ(u) = u/(1 + u²/c²), so A = Σ ψ′(u)·J·J₂ᵀ/σ² with
+// ψ′(u) = (1 − u²/c²)/(1 + u²/c²)², while the weights the steps use are w = 1/(1 + u²/c²). On lines
+// that share no pixel (the sparse map of the test above) and J = J₂ the covariance is then the
+// M-estimator's closed form A⁻¹·S·A⁻¹ with S = Σ w²·J·Jᵀ/σ², each line's J·Jᵀ/σ² taken from a map
+// holding that cell alone, from a pose off the truth (residuals of centimetres) with c their median
+// |u|, so that the lines lie on both sides of the influence's turn at |u| = c
+// (IconicOptions::influence_bread). The default bread, with w, is the same closed form with
+// A_w = Σ w·J·Jᵀ/σ², and differs from it by more than 10 % here.
+TEST(Iconic, WeightedCovarianceBreadIsTheInfluenceDerivative) {
+  CapsPair p;
+  const LocusMapper mapper(p.image2, p.ideal, nullptr);
+  ElevationMap sparse(p.map1.grid());
+  for (int r = 0; r < p.map1.grid().rows; r += 6)
+    for (int c = 0; c < p.map1.grid().cols; c += 6)
+      if (p.map1.stateAt(r, c) == CellState::Known) sparse.setKnown(r, c, p.map1.elevation()(r, c), p.map1.sigma()(r, c));
+  const std::vector<Eigen::Vector3d> normals(std::size_t(sparse.grid().cells()),
+                                             Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
+  PoseVector nu;
+  nu << 0.002, -0.002, 0.01, 0.02, -0.015, 0.01;
+  const std::vector<double> u = normalizedResiduals(sparse, mapper, nu);
+  std::vector<double> au;
+  for (const double x : u)
+    if (std::isfinite(x)) au.push_back(std::abs(x));
+  ASSERT_GT(au.size(), 30u);
+  std::nth_element(au.begin(), au.begin() + long(au.size() / 2), au.end());
+  const double c = au[au.size() / 2];
+  Matrix6d A = Matrix6d::Zero(), S = Matrix6d::Zero(), A_w = Matrix6d::Zero();
+  int beyond = 0;
+  for (int r = 0; r < sparse.grid().rows; ++r)
+    for (int col = 0; col < sparse.grid().cols; ++col) {
+      const double ui = u[std::size_t(r) * sparse.grid().cols + col];
+      if (!std::isfinite(ui)) continue;
+      ElevationMap one(sparse.grid());
+      one.setKnown(r, col, sparse.elevation()(r, col), sparse.sigma()(r, col));
+      const Matrix6d M = iconicError(one, mapper, nu, true, 0, &normals, 1, true).JtJ;  // J·Jᵀ/σ²
+      const double q = ui * ui / (c * c), w = 1 / (1 + q);
+      A += w * (1 - q) / (1 + q) * M, S += w * w * M, A_w += w * M;
+      beyond += q > 1;
+    }
+  EXPECT_GT(beyond, 10);
+  const Matrix6d Ai = A.inverse(), Awi = A_w.inverse();
+  const Matrix6d expected = Ai * S * Ai.transpose(), with_w = Awi * S * Awi.transpose();
+  const Matrix6d P = weightedCovariance(sparse, mapper, nu, c, normals, nullptr, true);
+  EXPECT_LT((P - expected).norm(), 1e-9 * expected.norm());
+  // The default bread is the weight's: the closed form with A_w, and the two differ here.
+  const Matrix6d P_w = weightedCovariance(sparse, mapper, nu, c, normals, nullptr);
+  EXPECT_LT((P_w - with_w).norm(), 1e-9 * with_w.norm());
+  EXPECT_GT((with_w - expected).norm(), 0.1 * expected.norm());
+}
+
 }  // namespace
 }  // namespace ambler::perception
 
