@@ -192,7 +192,7 @@ struct NeesAcross {
 
 // noise_scale multiplies the ERIM's noise coefficient k (the sensor grid of docs/matching.md).
 // dem_windows: the DEM kind's 20 terrains are 20 windows of the sample DTM instead (centres on a
-// 5 × 4 lattice 35 m apart about its centre (4000, 1093000) m). influence_bread: IconicOptions'.
+// 5 × 4 lattice 35 m apart about its centre). influence_bread: IconicOptions'.
 NeesAcross neesAcrossTerrains(bool quantise, bool restarts = false, double noise_scale = 1.0, bool dem_windows = false,
                               bool influence_bread = false) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -208,7 +208,8 @@ NeesAcross neesAcrossTerrains(bool quantise, bool restarts = false, double noise
       sc.seed = std::uint64_t(seed);
       if (dem_windows && sc.terrain.kind == terrains::TerrainKind::Dem) {
         const int i = seed - 1;
-        sc.terrain.dem_centre_m = Eigen::Vector2d(4000 - 70 + 35 * (i % 5), 1093000 - 52.5 + 35 * (i / 5));
+        const eval::SampleDemModel dtm;  // the model scenarios/dem/sample_dtm.tif was made from
+        sc.terrain.dem_centre_m = Eigen::Vector2d(dtm.centre_e_m - 70 + 35 * (i % 5), dtm.centre_n_m - 52.5 + 35 * (i / 5));
       }
       if (!quantise) sc.sensor.quantization_m = 0;
       sc.sensor.noise_k *= noise_scale;

@@ -230,6 +230,16 @@ TEST(Iconic, WeightedCostDividesEachResidualByItsSigma) {
   EXPECT_LT((weighted.JtJ - plain.JtJ).norm(), 1e-4 * plain.JtJ.norm());
 }
 
+// Map 1's known cells every 0.6 m (every sixth row and column): lines that share no pixel of
+// either image (the test below says why).
+ElevationMap everySixthCell(const ElevationMap& map) {
+  ElevationMap sparse(map.grid());
+  for (int r = 0; r < map.grid().rows; r += 6)
+    for (int c = 0; c < map.grid().cols; c += 6)
+      if (map.stateAt(r, c) == CellState::Known) sparse.setKnown(r, c, map.elevation()(r, c), map.sigma()(r, c));
+  return sparse;
+}
+
 // Lines that share no pixel of either image are independent observations: with the Jacobian taken
 // where the lines meet image 2 (map 1's normals not given, NaN: image 2's own at each hit, so that
 // J = J₂ and A = H) the covariance is then the inverse information (JᵀWJ)⁻¹ itself. Map 1's cells
@@ -243,10 +253,7 @@ TEST(Iconic, WeightedCovarianceOfLinesSharingNoPixelIsTheInverseInformation) {
   const Eigen::Isometry3d T1 = sensorPose({0, -3, 3}, {0, -30 * kDeg, 0});
   const RangeImage image1 = capsImage(p.caps, T1);
   const LocusMapper source(image1, p.ideal, nullptr);
-  ElevationMap sparse(p.map1.grid());
-  for (int r = 0; r < p.map1.grid().rows; r += 6)
-    for (int c = 0; c < p.map1.grid().cols; c += 6)
-      if (p.map1.stateAt(r, c) == CellState::Known) sparse.setKnown(r, c, p.map1.elevation()(r, c), p.map1.sigma()(r, c));
+  const ElevationMap sparse = everySixthCell(p.map1);
   const PoseVector nu = PoseVector::Zero();
   for (const bool all : {false, true}) {
     const ElevationMap& m = all ? p.map1 : sparse;
@@ -283,10 +290,7 @@ TEST(Iconic, WeightedCovarianceOfLinesSharingNoPixelIsTheInverseInformation) {
 TEST(Iconic, WeightedCovarianceBreadIsTheInfluenceDerivative) {
   CapsPair p;
   const LocusMapper mapper(p.image2, p.ideal, nullptr);
-  ElevationMap sparse(p.map1.grid());
-  for (int r = 0; r < p.map1.grid().rows; r += 6)
-    for (int c = 0; c < p.map1.grid().cols; c += 6)
-      if (p.map1.stateAt(r, c) == CellState::Known) sparse.setKnown(r, c, p.map1.elevation()(r, c), p.map1.sigma()(r, c));
+  const ElevationMap sparse = everySixthCell(p.map1);
   const std::vector<Eigen::Vector3d> normals(std::size_t(sparse.grid().cells()),
                                              Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN()));
   PoseVector nu;
