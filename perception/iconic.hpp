@@ -91,11 +91,10 @@ struct IconicOptions {
   // near the root (a stall, a nearly free direction), and LM's estimate is kept.
   double polish_max_mahalanobis2 = 22.458;
   // Weighted LM's covariance: the sandwich's bread A with the derivative ψ′ of the Cauchy influence
-  // (the M-estimator's own sandwich) instead of its weight w (weightedCovariance). Off by default:
-  // with it the mean NEES across 3 terrain kinds (20 DEM windows) is 5.94 with the ERIM's counts but
-  // 3.99 without them and 4.42 on one terrain's noise draws, conservative (docs/matching.md,
+  // (the M-estimator's own sandwich; weightedCovariance). Off: the weight w that the Gauss–Newton
+  // matrix holds fixed, which takes the cost for steeper than it is (docs/matching.md,
   // "Calibration", the bread).
-  bool influence_bread = false;
+  bool influence_bread = true;
   // The paper's descent as printed (iconicPaperDescent): its gain k = paper_gain/λ_max(JᵀJ at ν0),
   // fixed for the run, and its own iteration cap (a fixed-gain descent needs far more iterations
   // than the methods above).
@@ -235,12 +234,12 @@ IconicResult iconicWeighted(const ElevationMap& map1, const LocusMapper& image2,
 // the crossing (how r actually moves: the counts' staircase and the noise), not map 1's smoothed
 // normal that g takes (docs/matching.md, "Calibration"). With no pixel shared, J₂ = J and c = 0
 // (or every |u| ≪ c), S = A = H = JᵀWJ and the covariance is H⁻¹. map1_source as in IconicOptions (may be null).
-// influence_bread (IconicOptions): A = Σ (ψ′(u)/w)·g·J₂ᵀ, the estimating equation's own derivative,
+// influence_bread (IconicOptions, on by default): A = Σ (ψ′(u)/w)·g·J₂ᵀ, the estimating equation's own derivative,
 // ψ′(u) = (1 − u²/c²)/(1 + u²/c²)² the Cauchy influence's at the line's u = r/σ, where g holds its
-// weight w = 1/(1 + u²/c²).
+// weight w = 1/(1 + u²/c²); off, A holds w.
 Matrix6d weightedCovariance(const ElevationMap& map1, const LocusMapper& image2, const PoseVector& nu, double c,
                             const std::vector<Eigen::Vector3d>& reference_normals,
-                            const LocusMapper* map1_source, bool influence_bread = false);
+                            const LocusMapper* map1_source, bool influence_bread = true);
 
 // Registering a view with these (the believed pose, map J, every method): perception/registration.hpp.
 

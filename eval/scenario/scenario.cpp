@@ -632,18 +632,18 @@ perception::LocusConfig locusConfig(const Scenario& sc) { return sc.map->scanToM
 bool covarianceCalibrated(MatchMethod m, const perception::SensorModel& sensor) {
   if (m != MatchMethod::IconicWeighted && m != MatchMethod::FeaturesIconicWeighted) return false;
   // What was measured (docs/matching.md, "Calibration", the sensor grid): the ERIM's pixel grid
-  // and beam, and two lines through noise × counts on which the mean NEES is inside [4.5, 7.5]:
-  // its noise k with counts from 0 to its 7.62 cm (5.06–7.09), and its counts with k from 0 to
-  // its own (5.74–7.09). Off them it is not: noisier is overconfident (1.5·k: 7.54 without counts,
-  // 10.8 with them; 2·k: 9.6–16), quieter without the counts conservative (k/2: 4.09, k = 0: 2.66).
+  // and beam, and the line through noise × counts on which the mean NEES is inside [4.5, 7.5]: its
+  // 7.62 cm counts with noise from k/2 to its own k (4.82–5.94). Off it it is not: noisier is
+  // overconfident (1.5·k: 8.67, 2·k: 12.3), quieter or with finer counts conservative (k/4: 4.48;
+  // 2 cm counts: 4.20; none: 3.99).
   const perception::SensorModel erim;
   const auto same = [](double a, double b) { return std::abs(a - b) <= 1e-9 * std::max(1.0, std::abs(b)); };
   if (sensor.rows != erim.rows || sensor.cols != erim.cols || !same(sensor.fov_v_rad, erim.fov_v_rad) ||
       !same(sensor.fov_h_rad, erim.fov_h_rad) || !sensor.mixed_pixels ||
       sensor.beam_divergence_rad != erim.beam_divergence_rad || sensor.dropout != erim.dropout)
     return false;
-  return (same(sensor.noise_k, erim.noise_k) && sensor.quantization_m <= erim.quantization_m) ||
-         (same(sensor.quantization_m, erim.quantization_m) && sensor.noise_k <= erim.noise_k);
+  return same(sensor.quantization_m, erim.quantization_m) && sensor.noise_k >= 0.5 * erim.noise_k * (1 - 1e-9) &&
+         sensor.noise_k <= erim.noise_k * (1 + 1e-9);
 }
 
 perception::RegistrationConfig registrationConfig(const Scenario& sc) {

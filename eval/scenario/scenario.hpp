@@ -80,9 +80,8 @@ std::optional<MatchMethod> matchMethodFromName(std::string_view name);
 // Whether the method's covariance is calibrated (its mean NEES within [4.5, 7.5] across three
 // terrain kinds, tests/integration/test_matching_calibration.cpp; docs/matching.md,
 // "Calibration"): iconic_weighted's (and features+iconic_weighted's), with the sensors it was
-// measured with: the ERIM's pixel grid and beam (mixed pixels on, no dropouts), and either its
-// noise with counts up to its 7.62 cm (0 included) or its counts with noise up to its own. The
-// merge propagates only calibrated covariances.
+// measured with: the ERIM's pixel grid and beam (mixed pixels on, no dropouts), its 7.62 cm counts
+// and noise from half its own to its own. The merge propagates only calibrated covariances.
 bool covarianceCalibrated(MatchMethod m, const perception::SensorModel& sensor);
 
 struct MatchingSpec {

@@ -285,8 +285,8 @@ TEST(Iconic, WeightedCovarianceOfLinesSharingNoPixelIsTheInverseInformation) {
 // M-estimator's closed form A⁻¹·S·A⁻¹ with S = Σ w²·J·Jᵀ/σ², each line's J·Jᵀ/σ² taken from a map
 // holding that cell alone, from a pose off the truth (residuals of centimetres) with c their median
 // |u|, so that the lines lie on both sides of the influence's turn at |u| = c
-// (IconicOptions::influence_bread). The default bread, with w, is the same closed form with
-// A_w = Σ w·J·Jᵀ/σ², and differs from it by more than 10 % here.
+// (IconicOptions::influence_bread, the default). The bread with w instead is the same closed form
+// with A_w = Σ w·J·Jᵀ/σ², and differs from it by more than 10 % here.
 TEST(Iconic, WeightedCovarianceBreadIsTheInfluenceDerivative) {
   CapsPair p;
   const LocusMapper mapper(p.image2, p.ideal, nullptr);
@@ -318,10 +318,10 @@ TEST(Iconic, WeightedCovarianceBreadIsTheInfluenceDerivative) {
   EXPECT_GT(beyond, 10);
   const Matrix6d Ai = A.inverse(), Awi = A_w.inverse();
   const Matrix6d expected = Ai * S * Ai.transpose(), with_w = Awi * S * Awi.transpose();
-  const Matrix6d P = weightedCovariance(sparse, mapper, nu, c, normals, nullptr, true);
+  const Matrix6d P = weightedCovariance(sparse, mapper, nu, c, normals, nullptr);
   EXPECT_LT((P - expected).norm(), 1e-9 * expected.norm());
-  // The default bread is the weight's: the closed form with A_w, and the two differ here.
-  const Matrix6d P_w = weightedCovariance(sparse, mapper, nu, c, normals, nullptr);
+  // The weight's bread: the closed form with A_w, and the two differ here.
+  const Matrix6d P_w = weightedCovariance(sparse, mapper, nu, c, normals, nullptr, false);
   EXPECT_LT((P_w - with_w).norm(), 1e-9 * with_w.norm());
   EXPECT_GT((with_w - expected).norm(), 0.1 * expected.norm());
 }
