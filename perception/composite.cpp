@@ -111,6 +111,19 @@ void addSigma(ElevationMap& map, const Raster<float>& extra) {
     }
 }
 
+void addShared(Raster<float>& shared, const ElevationMap& map, const Raster<float>& extra) {
+  const MapGrid& g = map.grid();
+  if (extra.rows() != g.rows || extra.cols() != g.cols || shared.rows() != g.rows || shared.cols() != g.cols)
+    throw std::invalid_argument("addShared: sizes differ");
+  for (int r = 0; r < g.rows; ++r)
+    for (int c = 0; c < g.cols; ++c) {
+      const float e = extra(r, c);
+      if (map.stateAt(r, c) != CellState::Known || std::isnan(e)) continue;
+      const float s = std::isnan(shared(r, c)) ? 0.0f : shared(r, c);
+      shared(r, c) = std::min(map.sigma()(r, c), std::sqrt(s * s + e * e));
+    }
+}
+
 namespace {
 
 // The part of each Known cell's σ every view of it shares (docs/composite.md, "What the views

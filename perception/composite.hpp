@@ -47,6 +47,12 @@ Raster<float> registrationSigma(const ElevationMap& map, const PoseVector& nu, c
 // leaves a cell alone). Throws std::invalid_argument if the sizes differ.
 void addSigma(ElevationMap& map, const Raster<float>& extra);
 
+// The shared part of each Known cell's σ (`shared`, as mergeInto takes it; NaN: none) grown by
+// `extra` in quadrature, √(shared² + extra²), and held at most the cell's σ in `map` (which should
+// already include `extra`). NaN extra leaves a cell alone. Throws std::invalid_argument if the sizes
+// differ.
+void addShared(Raster<float>& shared, const ElevationMap& map, const Raster<float>& extra);
+
 // A view's map as a composite merges it (docs/composite.md): the scan (its unwrapped image and
 // edges) mapped on `grid` at T_WS (mapAtPose) with `config` and the footprint's term in σ on
 // (LocusConfig::footprint_sigma), and in `shared` the part of each Known cell's σ every view of it

@@ -113,15 +113,21 @@ CorridorWindow Localiser::window(const Eigen::Isometry3d& T_WS) const {
 }
 
 void Localiser::merge(const ScanMap& scan, const Eigen::Isometry3d& T_WS, const std::optional<Matrix6d>& nu_covariance,
+                      const std::optional<Matrix6d>& drift_covariance,
                       const PoseVector& nu, StopEstimate& stop) {
   const auto t0 = std::chrono::steady_clock::now();
   const CorridorWindow w = window(T_WS);
   if (w.grid.rows == 0 || w.grid.cols == 0) return;
   Raster<float> shared;
   ElevationMap map = mapForComposite(scan, T_WS, w.grid, config_.map.locus, shared);
-  // The pose's σ enters each view as its own (not as the shared part of docs/composite.md): the
-  // poses of stops a few metres apart drift apart as much as together (docs/traverse.md).
+  // The pose's σ enters each view's σ and, with drift.shared, the part every view of a cell shares
+  // (docs/composite.md): the poses of stops that see the same cells err together (docs/traverse.md).
   if (nu_covariance) addSigma(map, registrationSigma(map, nu, *nu_covariance));
+  if (drift_covariance) {
+    const Raster<float> drift_sigma = registrationSigma(map, nu, *drift_covariance);
+    addSigma(map, drift_sigma);
+    if (config_.drift->shared) addShared(shared, map, drift_sigma);
+  }
   ElevationMap block = cropMap(composite_, w);
   Raster<float> block_shared = composite_shared_.block(w.row0, w.col0, w.grid.rows, w.grid.cols);
   mergeInto(block, block_shared, map, shared);
@@ -145,7 +151,7 @@ const StopEstimate& Localiser::start(const RangeImage& measured, const SensorMod
   const auto t0 = std::chrono::steady_clock::now();
   ScanMap scan = scanToMap(measured, sensor, stop.estimated_WS, window(stop.estimated_WS).grid, config_.map);
   stop.seconds_map = secondsSince(t0);
-  merge(scan, stop.estimated_WS, std::nullopt, PoseVector::Zero(), stop);
+  merge(scan, stop.estimated_WS, std::nullopt, std::nullopt, PoseVector::Zero(), stop);
   previous_ = std::move(scan);
   stops_.push_back(std::move(stop));
   return stops_.back();
@@ -192,13 +198,11 @@ const StopEstimate& Localiser::step(const RangeImage& measured, const SensorMode
     covariance = priorNuCovariance(config_.registration.odometry->at(stop.since_fix_m), stop.predicted_WS);
   }
   // The drift the rover believes it has at its last fix, under whatever this stop adds.
-  if (config_.drift) {
-    const Matrix6d drift = driftNuCovariance(*config_.drift, stop.fix_distance_m, stop.estimated_WS);
-    covariance = covariance ? Matrix6d(*covariance + drift) : drift;
-  }
+  std::optional<Matrix6d> drift;
+  if (config_.drift) drift = driftNuCovariance(*config_.drift, stop.fix_distance_m, stop.estimated_WS);
   // A rejected (or absent) registration keeps the dead-reckoned pose as it is.
   stop.estimated_WB = stop.accepted ? bodyUnder(stop.estimated_WS, config_.mount) : stop.predicted_WB;
-  merge(scan, stop.estimated_WS, covariance, nu, stop);
+  merge(scan, stop.estimated_WS, covariance, drift, nu, stop);
   previous_ = scan;
   previous_->image.T_WS = stop.estimated_WS;
   stops_.push_back(std::move(stop));

@@ -93,9 +93,11 @@ class Localiser {
   CorridorWindow window(const Eigen::Isometry3d& T_WS) const;
 
  private:
-  // Maps the scan at `T_WS` on its window and merges it with `extra` σ (NaN: none) per cell.
+  // Maps the scan at `T_WS` on its window and merges it with the σ its pose adds: `nu_covariance`'s
+  // as the view's own, the drift's as its own too or, with drift.shared, as part of the σ every view
+  // of a cell shares.
   void merge(const ScanMap& scan, const Eigen::Isometry3d& T_WS, const std::optional<Matrix6d>& nu_covariance,
-             const PoseVector& nu, StopEstimate& stop);
+             const std::optional<Matrix6d>& drift_covariance, const PoseVector& nu, StopEstimate& stop);
   ReferenceView reference() const;
 
   LocaliserConfig config_;

@@ -139,10 +139,11 @@ void readOdometry(const Reader& reader, const YAML::Node& node, TraverseOdometry
 
 void readDrift(const Reader& reader, const YAML::Node& node, perception::LocalisationDrift& d) {
   const Fields f(reader, node, "traverse.drift",
-                 {"translation_sigma_per_m", "vertical_sigma_per_m", "heading_sigma_deg_per_sqrt_m"});
+                 {"translation_sigma_per_m", "vertical_sigma_per_m", "heading_sigma_deg_per_sqrt_m", "shared"});
   d.translation_sigma_per_m = f.number("translation_sigma_per_m", kNonNegative, d.translation_sigma_per_m);
   d.vertical_sigma_per_m = f.number("vertical_sigma_per_m", kNonNegative, d.vertical_sigma_per_m);
   d.heading_sigma_deg_per_sqrt_m = f.number("heading_sigma_deg_per_sqrt_m", kNonNegative, d.heading_sigma_deg_per_sqrt_m);
+  d.shared = f.boolean("shared", d.shared);
 }
 
 }  // namespace

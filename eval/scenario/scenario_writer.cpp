@@ -199,7 +199,8 @@ std::string traverseYaml(const TraverseSpec& t) {
        ", heading_bias_deg_per_m: " + num(o.heading_bias_deg_per_m) + "}\n";
   const perception::LocalisationDrift& d = t.drift;
   y += "  drift: {translation_sigma_per_m: " + num(d.translation_sigma_per_m) + ", vertical_sigma_per_m: " +
-       num(d.vertical_sigma_per_m) + ", heading_sigma_deg_per_sqrt_m: " + num(d.heading_sigma_deg_per_sqrt_m) + "}\n";
+       num(d.vertical_sigma_per_m) + ", heading_sigma_deg_per_sqrt_m: " + num(d.heading_sigma_deg_per_sqrt_m) +
+       ", shared: " + (d.shared ? "true" : "false") + "}\n";
   y += std::string("  register: ") + traverseRegisterName(t.reg) + "\n";
   y += std::string("  method: ") + matchMethodName(t.method) + "\n";
   return y;

@@ -194,6 +194,24 @@ TEST(Composite, AddSigmaIsInQuadrature) {
   EXPECT_THROW(addSigma(m, Raster<float>::Zero(2, 2)), std::invalid_argument);
 }
 
+// A shared part of 0.03 (or none, NaN) grown by 0.04 is 0.05 (0.04), held at the cell's σ; NaN extra
+// leaves it as it was.
+TEST(Composite, AddSharedIsInQuadratureAndAtMostTheCellsSigma) {
+  ElevationMap m = planeMap(0, 0, 0, 0.06);
+  const int R = m.grid().rows, C = m.grid().cols;
+  Raster<float> shared = Raster<float>::Constant(R, C, 0.03f);
+  shared(1, 2) = std::numeric_limits<float>::quiet_NaN();
+  Raster<float> extra = Raster<float>::Constant(R, C, 0.04f);
+  extra(0, 0) = std::numeric_limits<float>::quiet_NaN();
+  extra(2, 1) = 0.08f;  // √(0.03² + 0.08²) = 0.085 > σ = 0.06
+  addShared(shared, m, extra);
+  EXPECT_NEAR(shared(1, 1), 0.05, 1e-7);
+  EXPECT_NEAR(shared(1, 2), 0.04, 1e-7);
+  EXPECT_FLOAT_EQ(shared(2, 1), 0.06f);
+  EXPECT_FLOAT_EQ(shared(0, 0), 0.03f);
+  EXPECT_THROW(addShared(shared, m, Raster<float>::Zero(2, 2)), std::invalid_argument);
+}
+
 // ---- buildComposite on scans of a plane.
 
 constexpr double kU = 0x1p-24;  // unit round-off of float32: the maps' stored elevations and σ

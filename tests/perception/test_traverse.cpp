@@ -268,5 +268,44 @@ TEST(Localiser, TheCompositesSigmaCarriesTheDriftOfTheLastFix) {
   EXPECT_GT(checked, 100);
 }
 
+// drift.shared: the drift's σ as the part every view of a cell shares. On the level plane only the
+// vertical drift moves the surface, by b·d_k at stop k, the same at every cell: fully correlated
+// between the views of a cell, it does not average down, so a cell's σ is at least the smallest
+// b·d_k among its views (there: d ≥ 1 m for stops 1–3; stop 0 has none). Counted as each view's
+// own it averages down, and the composite's σ of a cell seen by several drifting views is smaller.
+// A cell only one stop maps has the same σ either way (sharing changes nothing for one view).
+TEST(Localiser, ASharedDriftDoesNotAverageDown) {
+  int calls = 0;
+  LocaliserConfig shared = planeConfig(TraverseReference::Composite);
+  shared.drift = LocalisationDrift{0.0, 0.01, 0.0};
+  LocaliserConfig own = shared;
+  own.drift->shared = false;
+  ASSERT_TRUE(shared.drift->shared);  // the default
+  Localiser a(shared, fixedRegistrar(true, 0, &calls)), b(own, fixedRegistrar(true, 0, &calls));
+  Localiser first(shared, fixedRegistrar(true, 0, &calls));
+  walk(a, 4);
+  walk(b, 4);
+  walk(first, 1);  // stop 0 alone: the cells it sees carry no drift
+  int single = 0, several = 0, smaller = 0;
+  for (int r = 0; r < a.composite().grid().rows; ++r)
+    for (int c = 0; c < a.composite().grid().cols; ++c) {
+      if (a.composite().stateAt(r, c) != CellState::Known) continue;
+      ASSERT_EQ(b.composite().stateAt(r, c), CellState::Known);
+      if (first.composite().stateAt(r, c) == CellState::Known) continue;
+      const double sa = a.composite().sigma()(r, c), sb = b.composite().sigma()(r, c);
+      EXPECT_GE(sa, 0.01 * 1.0 * (1 - 1e-6)) << r << " " << c;
+      if (sa == sb) {
+        ++single;
+      } else {
+        ++several;
+        EXPECT_GT(sa, sb) << r << " " << c;
+        if (sb < 0.01 * 1.0) ++smaller;
+      }
+    }
+  EXPECT_GT(single, 0);
+  EXPECT_GT(several, 100);
+  EXPECT_GT(smaller, 0);  // averaged down below any one view's drift: what sharing prevents
+}
+
 }  // namespace
 }  // namespace ambler::perception

@@ -53,6 +53,7 @@ void expectSameTraverse(const TraverseSpec& a, const TraverseSpec& b) {
   EXPECT_EQ(bits(a.drift.translation_sigma_per_m), bits(b.drift.translation_sigma_per_m));
   EXPECT_EQ(bits(a.drift.vertical_sigma_per_m), bits(b.drift.vertical_sigma_per_m));
   EXPECT_EQ(bits(a.drift.heading_sigma_deg_per_sqrt_m), bits(b.drift.heading_sigma_deg_per_sqrt_m));
+  EXPECT_EQ(a.drift.shared, b.drift.shared);
   EXPECT_EQ(a.reg, b.reg);
   EXPECT_EQ(a.method, b.method);
 }
@@ -73,7 +74,7 @@ TEST(ScenarioTraverse, EveryKeyIsRead) {
       withTraverse("{path: {waypoints_xy_m: [[-20, -5], [0, 0], [20, 5.5]]}, stop_spacing_m: 0.5, footprint_radius_m: 0.8, "
                    "mount: {height_m: 2.5, pitch_deg: -35}, odometry: {translation_sigma_per_m: 0.03, "
                    "heading_sigma_deg_per_m: 0.25, translation_bias: -0.05, heading_bias_deg_per_m: 0.1}, "
-                   "drift: {translation_sigma_per_m: 0.004, vertical_sigma_per_m: 0.0007, heading_sigma_deg_per_sqrt_m: 0.09}, "
+                   "drift: {translation_sigma_per_m: 0.004, vertical_sigma_per_m: 0.0007, heading_sigma_deg_per_sqrt_m: 0.09, shared: false}, "
                    "register: previous, method: features+iconic_robust}"),
       kFile);
   ASSERT_TRUE(s.traverse.has_value());
@@ -94,6 +95,7 @@ TEST(ScenarioTraverse, EveryKeyIsRead) {
   EXPECT_EQ(t.drift.translation_sigma_per_m, 0.004);
   EXPECT_EQ(t.drift.vertical_sigma_per_m, 0.0007);
   EXPECT_EQ(t.drift.heading_sigma_deg_per_sqrt_m, 0.09);
+  EXPECT_FALSE(t.drift.shared);
   EXPECT_EQ(t.reg, TraverseRegister::Previous);
   EXPECT_EQ(t.method, MatchMethod::FeaturesIconicRobust);
   expectRoundTrip(s);
@@ -161,7 +163,7 @@ TEST(ScenarioTraverse, DefaultsAreTheStructs) {
                            "  odometry: {translation_sigma_per_m: 0.02, heading_sigma_deg_per_m: 0.5, translation_bias: 0, "
                            "heading_bias_deg_per_m: 0}\n",
                            "  drift: {translation_sigma_per_m: 0.0033, vertical_sigma_per_m: 0.0003, "
-                           "heading_sigma_deg_per_sqrt_m: 0.067}\n",
+                           "heading_sigma_deg_per_sqrt_m: 0.067, shared: true}\n",
                            "  register: composite\n", "  method: features+iconic_lm\n"})
     EXPECT_NE(y.find(line), std::string::npos) << line << "\n" << y;
   EXPECT_EQ(y.find("views:"), std::string::npos) << y;
